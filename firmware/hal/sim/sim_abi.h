@@ -1,0 +1,80 @@
+/**
+ * \file sim_abi.h
+ * The contract between the firmware compiled to WebAssembly (hal/sim) and the JVM emulator.
+ * The emulator mirrors every declaration here (emulator/.../firmware/); change both together.
+ *
+ * Time: the MCU clock runs at 32 MHz; `ticks` are 32 MHz clock cycles since sim_init, as int64.
+ * The emulator calls sim_advance(t) with non-decreasing t; before delivering an event that happens at
+ * time t (encoder edge, received byte, IR message) it first calls sim_advance(t).
+ */
+#ifndef SIM_ABI_H
+#define SIM_ABI_H
+
+#include <stdint.h>
+
+#define SIM_EXPORT(name) __attribute__((export_name(#name)))
+#define SIM_IMPORT(name) __attribute__((import_module("env"), import_name(#name)))
+
+/* ---- exports: called by the emulator -------------------------------------------------------- */
+
+/** Starts the firmware (all module inits). A non-zero robot_id overrides settings.identity.robot_id
+ *  and sets the name "PocketBot-<id>" (a real robot has them in EEPROM). */
+SIM_EXPORT(sim_init) void sim_init(int32_t robot_id);
+
+/** Advances the MCU clock to `now_ticks`: fires every timer compare interrupt due, in time order, each
+ *  seeing its own exact time, then runs the main loop until it has nothing left to do. */
+SIM_EXPORT(sim_advance) void sim_advance(int64_t now_ticks);
+
+/** An encoder pulse (a stripe edge) of wheel 0 (left) or 1 (right), captured at `ticks` by the timer's
+ *  input capture. The encoders have one channel: the firmware signs the count by the motor direction. */
+SIM_EXPORT(sim_encoder_edge) void sim_encoder_edge(int32_t wheel, int64_t ticks);
+
+/** A byte received from the host link (USART RX complete interrupt). */
+SIM_EXPORT(sim_uart_rx) void sim_uart_rx(int32_t byte);
+
+/** Takes up to `max` bytes the firmware has queued for the host link into the buffer at
+ *  sim_uart_tx_buffer(); returns how many. The emulator calls it at the link's baud rate. */
+SIM_EXPORT(sim_uart_tx_take) int32_t sim_uart_tx_take(int32_t max);
+SIM_EXPORT(sim_uart_tx_buffer) int32_t sim_uart_tx_buffer(void);
+
+/** An IR message heard by receiver `side` (0 front, 1 rear). A robot hearing its own id sees an
+ *  obstacle (its reflection). `len` payload bytes (0..8) are packed little-endian in lo, hi. */
+SIM_EXPORT(sim_ir_rx) void sim_ir_rx(int32_t side, int32_t sender_id, int32_t sender_led, int32_t power,
+                                     int32_t len, int32_t payload_lo, int32_t payload_hi);
+
+/** Addresses in linear memory of the outputs the emulator reads after each advance (sim_outputs_t),
+ *  and of the global robot_state and settings (for tests and ground-truth comparisons). */
+SIM_EXPORT(sim_outputs) int32_t sim_outputs(void);
+SIM_EXPORT(sim_state) int32_t sim_state(void);
+SIM_EXPORT(sim_settings) int32_t sim_settings(void);
+
+/** What the firmware drives, little-endian in linear memory at sim_outputs(). */
+typedef struct __attribute__((packed)) {
+    int16_t pwm_left;      /**< motor duty, permille, -1000..1000 */
+    int16_t pwm_right;
+    uint8_t led;           /**< status LED bitmask */
+    uint8_t line_emitters; /**< bitmask of the 5 line sensor emitters currently lit */
+} sim_outputs_t;
+
+/* ---- imports: provided by the emulator (module "env") --------------------------------------- */
+
+/** Line sensor detector `detector` (0..3, left to right) read now with the emitters in `emitters`
+ *  (bit e = emitter e, 0..4) lit; 12-bit ADC result 0..4095. Detector d sits between emitters d and
+ *  d+1: spot 2d is lit by emitter d, spot 2d+1 by emitter d+1. */
+SIM_IMPORT(line_adc) int32_t line_adc(int32_t detector, int32_t emitters);
+
+/** Other sensors, read now, in physical units. */
+enum sim_sensor {
+    SIM_SENSOR_BATTERY_MV = 0, SIM_SENSOR_CURRENT_MA = 1, SIM_SENSOR_MCU_TEMP_DC = 2,
+    SIM_SENSOR_ACCEL_X_MG = 3, SIM_SENSOR_ACCEL_Y_MG = 4, SIM_SENSOR_ACCEL_Z_MG = 5,
+    SIM_SENSOR_COLOUR_R = 6, SIM_SENSOR_COLOUR_G = 7, SIM_SENSOR_COLOUR_B = 8, SIM_SENSOR_COLOUR_CLEAR = 9
+};
+SIM_IMPORT(sensor_read) int32_t sensor_read(int32_t sensor);
+
+/** The firmware sends an IR message now from LED `led` (0 front, 1 right, 2 rear, 3 left) at `power`
+ *  percent; the emulator delivers it (sim_ir_rx) to every receiver in range, the sender's own
+ *  receiver included when an obstacle reflects it. */
+SIM_IMPORT(ir_send) void ir_send(int32_t sender_id, int32_t led, int32_t power, int32_t len,
+                                 int32_t payload_lo, int32_t payload_hi);
+
+#endif
