@@ -1,0 +1,244 @@
+/**
+ * \file bench_main.c
+ * Cycle counts of the main loop tick and of each task, on the ATmega1284 build of the portable core under
+ * simavr (clk/1 Timer1 around the code), as a share of the 32,000-cycle budget of a 1 ms tick at 32 MHz.
+ * Scenarios: idle; a movement with encoder pulses, a full state packet every tick, IR messages heard and
+ * debug text at level 4; line following; teleoperation. Output goes out on UART0 (simavr prints it).
+ */
+#include <avr/interrupt.h>
+#include <avr/io.h>
+#include <avr/sleep.h>
+#include <string.h>
+
+#include "app.h"
+#include "bench.h"
+#include "drivers/encoder.h"
+#include "drivers/eeprom.h"
+#include "drivers/line_sensor.h"
+#include "drivers/sensors.h"
+#include "drivers/uart.h"
+#include "hal/hal.h"
+#include "modules/comm.h"
+#include "modules/failsafe.h"
+#include "modules/line_follower.h"
+#include "modules/locomotion.h"
+#include "modules/proximity.h"
+#include "modules/reflector.h"
+#include "modules/scheduler.h"
+#include "modules/settings.h"
+#include "modules/speed.h"
+
+#define BUDGET 32000ul
+#define TASKS 10
+
+static volatile uint16_t ovf;
+ISR(TIMER1_OVF_vect) { ovf++; }
+
+static uint32_t cycles(void)
+{
+    uint8_t s = SREG;
+    cli();
+    uint16_t lo = TCNT1, hi = ovf;
+    if ((TIFR1 & (1 << TOV1)) && lo < 0x8000u)
+        hi++;
+    SREG = s;
+    return ((uint32_t)hi << 16) | lo;
+}
+
+static void out_c(char c)
+{
+    while (!(UCSR0A & (1 << UDRE0))) {
+    }
+    UDR0 = (uint8_t)c;
+}
+
+static void out_s(const char *s)
+{
+    while (*s)
+        out_c(*s++);
+}
+
+static void out_u(uint32_t v, uint8_t width)
+{
+    char d[10];
+    uint8_t n = 0;
+    do {
+        d[n++] = (char)('0' + v % 10u);
+        v /= 10u;
+    } while (v);
+    while (width-- > n)
+        out_c(' ');
+    while (n)
+        out_c(d[--n]);
+}
+
+static void out_pct(uint32_t c)
+{
+    uint32_t tenths = (c * 1000u + BUDGET / 2) / BUDGET;
+    out_u(tenths / 10u, 4);
+    out_c('.');
+    out_u(tenths % 10u, 1);
+    out_s(" %");
+}
+
+typedef void (*task_t)(void);
+static const char *const names[TASKS] = {"speed", "line_sensor", "sensors", "proximity", "comm",
+                                          "failsafe", "line_follower", "locomotion", "eeprom", "reflector"};
+static const task_t tasks[TASKS] = {speed_task, line_sensor_task, sensors_task, proximity_task, comm_task,
+                                    failsafe_task, line_follower_task, locomotion_task, eeprom_task,
+                                    reflector_task};
+static uint32_t task_max[TASKS];
+static uint32_t task_sum[TASKS];
+static uint16_t task_n;
+static uint32_t tick_sum;
+static uint32_t tick_max, worst_tick;
+static uint32_t isr_max;
+static uint32_t enc_t[2];
+
+/* One millisecond: scheduler interrupts in 100 us steps, encoder edges, then the tick, each task timed. */
+static void one_tick(uint8_t moving, uint8_t chatter)
+{
+    for (uint8_t k = 0; k < 10; k++) {
+        bench_us += 100;
+        uint32_t t0 = cycles();
+        bench_fire_due();
+        uint32_t d = cycles() - t0;
+        if (d > isr_max)
+            isr_max = d;
+    }
+    if (moving) { /* about 140 mm/s: a pulse every 5 ms per wheel */
+        for (uint8_t w = 0; w < 2; w++)
+            if ((bench_us / 1000u + w) % 5u == 0) {
+                enc_t[w] = bench_us * 4u;
+                encoder_capture_isr(w, enc_t[w]);
+            }
+    }
+    if (chatter) { /* two IR messages heard and a heartbeat from the host every tick */
+        hal_ir_msg_t m = {7, 2, 50, 4, {1, 2, 3, 4, 0, 0, 0, 0}};
+        m.data[0] = (uint8_t)bench_us;
+        ir_rx_isr(0, &m);
+        m.power = 25;
+        ir_rx_isr(1, &m);
+        static const uint8_t hb[] = {0xC0, 0x11, 0x00, 0x00, 0xCF, 0xB8, 0xC0};
+        for (uint8_t i = 0; i < sizeof hb; i++)
+            uart_rx_isr(hb[i]);
+    }
+    if (!scheduler_tick_begin())
+        return;
+    robot_state.time.time_ms++;
+    uint32_t start = cycles();
+    for (uint8_t i = 0; i < TASKS; i++) {
+        uint32_t t0 = cycles();
+        tasks[i]();
+        uint32_t d = cycles() - t0;
+        if (d > task_max[i])
+            task_max[i] = d;
+        task_sum[i] += d;
+    }
+    task_n++;
+    uint32_t total = cycles() - start;
+    scheduler_tick_end();
+    if (total > tick_max)
+        tick_max = total;
+    tick_sum += total;
+    /* Drain the link as a 115200 Bd UART would (12 bytes per ms), keeping room for packets. */
+    for (uint8_t i = 0; i < 12; i++)
+        uart_tx_isr();
+}
+
+static void report(const char *scenario)
+{
+    out_s("BENCH: ");
+    out_s(scenario);
+    out_s(": worst tick ");
+    out_u(tick_max, 6);
+    out_s(" cycles =");
+    out_pct(tick_max);
+    out_s(", mean ");
+    out_u(tick_sum / task_n, 1);
+    out_s(" cycles =");
+    out_pct(tick_sum / task_n);
+    out_s("\n");
+    out_s("BENCH:   task            worst  share      mean  share\n");
+    for (uint8_t i = 0; i < TASKS; i++) {
+        out_s("BENCH:   ");
+        out_s(names[i]);
+        for (uint8_t k = (uint8_t)strlen(names[i]); k < 14; k++)
+            out_c(' ');
+        out_u(task_max[i], 6);
+        out_pct(task_max[i]);
+        out_u(task_sum[i] / task_n, 9);
+        out_pct(task_sum[i] / task_n);
+        out_s("\n");
+    }
+    if (tick_max > worst_tick)
+        worst_tick = tick_max;
+    memset(task_max, 0, sizeof task_max);
+    memset(task_sum, 0, sizeof task_sum);
+    task_n = 0;
+    tick_max = 0;
+    tick_sum = 0;
+}
+
+static void run(uint16_t ticks, uint8_t moving, uint8_t chatter)
+{
+    for (uint16_t i = 0; i < ticks; i++)
+        one_tick(moving, chatter);
+}
+
+int main(void)
+{
+    UBRR0 = 0;
+    UCSR0B = (1 << TXEN0);
+    TCCR1A = 0;
+    TCCR1B = (1 << CS10); /* clk/1 */
+    TIMSK1 = (1 << TOIE1);
+    app_init();
+    sei();
+
+    settings.link.failsafe_timeout_ms = 0;
+    run(50, 0, 0);
+    report("idle, full state every 100 ms");
+
+    locomotion_straight(1, 10.0f, 0.15f);
+    run(400, 1, 0);
+    report("movement, full state every 100 ms");
+
+    line_follower_command(1, PB_COLOUR_MODE_SEGMENTS, 0.0f);
+    bench_line_spot = 2;
+    run(400, 1, 0);
+    report("line following, full state every 100 ms");
+
+    locomotion_teleop(0.1f, -0.1f);
+    settings.sync.mode = PB_SYNC_MODE_REDUCED;
+    settings.sync.period_ms = 5;
+    run(400, 1, 1);
+    report("teleoperation, reduced state every 5 ms, IR payloads and a host packet every tick");
+    uint32_t realistic = worst_tick;
+
+    settings.debug.level = 4;
+    settings.sync.mode = PB_SYNC_MODE_FULL;
+    settings.sync.period_ms = 1;
+    locomotion_straight(2, 10.0f, 0.15f);
+    locomotion_straight(3, 10.0f, 0.15f);
+    run(300, 1, 1);
+    report("stress: movement start, full state EVERY tick, IR payloads, host packets, debug level 4");
+
+    out_s("BENCH: scheduler interrupts (line sensor phases, beacons), worst: ");
+    out_u(isr_max, 1);
+    out_s(" cycles\n");
+    out_s("BENCH: WORST TICK (first four scenarios) ");
+    out_u(realistic, 1);
+    out_s(" cycles =");
+    out_pct(realistic);
+    out_s(" of the 1 ms budget (goal <= 25 %); stress scenario ");
+    out_u(worst_tick, 1);
+    out_s(" cycles =");
+    out_pct(worst_tick);
+    out_s("\n");
+    while (UCSR0A & (1 << UDRE0) ? 0 : 1) {
+    }
+    cli();
+    sleep_enable();
+    sleep_cpu();
+}

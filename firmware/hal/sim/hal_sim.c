@@ -1,0 +1,293 @@
+/**
+ * \file hal_sim.c
+ * The HAL inside the emulator (WebAssembly): the emulator drives time with sim_advance() and delivers
+ * interrupts through the exports of sim_abi.h; sensors and the IR transmitter are imports.
+ *
+ * Time: MCU ticks at 32 MHz (int64). hal_micros() = ticks / 32, capture timestamps = ticks / 8 (4 MHz).
+ * sim_advance() fires due compare interrupts in time order, each at its own time, and after each one runs
+ * the main loop until it has nothing to do (as the MCU would between interrupts); code takes no time.
+ */
+#include <stddef.h>
+#include <string.h>
+
+#include "app.h"
+#include "hal/hal.h"
+#include "hal/sim/sim_abi.h"
+#include "modules/reflector.h"
+#include "modules/settings.h"
+
+#define TICKS_PER_US 32
+#define TICKS_PER_CAPTURE 8
+
+static int64_t now_ticks;
+static int64_t deadline[HAL_SCHED_CHANNELS];
+static uint8_t armed[HAL_SCHED_CHANNELS];
+static uint8_t board_id;
+static sim_outputs_t outputs;
+static uint16_t line_result[HAL_LINE_DETECTORS];
+static uint8_t eeprom[HAL_EEPROM_SIZE];
+static uint8_t eeprom_ready;
+static uint8_t tx_out[256];
+static uint8_t irq_enabled;
+
+/* ---- board ---- */
+
+void hal_init(void)
+{
+    memset(armed, 0, sizeof armed);
+    memset(&outputs, 0, sizeof outputs);
+    memset(line_result, 0, sizeof line_result);
+    irq_enabled = 0;
+}
+
+void hal_irq_enable(void)
+{
+    irq_enabled = 1;
+}
+
+uint8_t hal_board_id(void)
+{
+    return board_id;
+}
+
+void hal_idle(void)
+{
+}
+
+/* Interrupts are delivered only between exports, never inside the main loop: masking is a no-op. */
+uint8_t hal_irq_save(void)
+{
+    return 0;
+}
+
+void hal_irq_restore(uint8_t saved)
+{
+    (void)saved;
+}
+
+/* ---- time ---- */
+
+uint32_t hal_micros(void)
+{
+    return (uint32_t)(uint64_t)(now_ticks / TICKS_PER_US);
+}
+
+void hal_sched_arm(uint8_t ch, uint32_t at_us)
+{
+    if (ch >= HAL_SCHED_CHANNELS)
+        return;
+    int32_t ahead = (int32_t)(at_us - hal_micros());
+    int64_t base = (now_ticks / TICKS_PER_US) * TICKS_PER_US;
+    deadline[ch] = ahead > 0 ? base + (int64_t)ahead * TICKS_PER_US : now_ticks;
+    armed[ch] = 1;
+}
+
+void hal_sched_disarm(uint8_t ch)
+{
+    if (ch < HAL_SCHED_CHANNELS)
+        armed[ch] = 0;
+}
+
+uint32_t hal_capture_now(void)
+{
+    return (uint32_t)(uint64_t)(now_ticks / TICKS_PER_CAPTURE);
+}
+
+/* ---- outputs ---- */
+
+void hal_motors_set(int16_t left, int16_t right)
+{
+    outputs.pwm_left = left;
+    outputs.pwm_right = right;
+}
+
+void hal_led_set(uint8_t mask)
+{
+    outputs.led = mask;
+}
+
+void hal_line_emitters(uint8_t mask)
+{
+    outputs.line_emitters = (uint8_t)(mask & 0x1Fu);
+}
+
+void hal_line_convert(void)
+{
+    for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++) {
+        int32_t v = line_adc(d, outputs.line_emitters);
+        line_result[d] = (uint16_t)(v < 0 ? 0 : v > 4095 ? 4095 : v);
+    }
+}
+
+void hal_line_results(uint16_t out[HAL_LINE_DETECTORS])
+{
+    memcpy(out, line_result, sizeof line_result);
+}
+
+int32_t hal_sensor_read(uint8_t sensor)
+{
+    return sensor < HAL_SENSOR_COUNT ? sensor_read(sensor) : 0;
+}
+
+bool hal_ir_send(const hal_ir_msg_t *m)
+{
+    uint32_t lo = 0, hi = 0;
+    uint8_t len = m->len > HAL_IR_PAYLOAD_MAX ? HAL_IR_PAYLOAD_MAX : m->len;
+    for (uint8_t i = 0; i < len; i++) {
+        if (i < 4)
+            lo |= (uint32_t)m->data[i] << (8 * i);
+        else
+            hi |= (uint32_t)m->data[i] << (8 * (i - 4));
+    }
+    ir_send(m->sender_id, m->led, m->power, len, (int32_t)lo, (int32_t)hi);
+    return true;
+}
+
+void hal_uart_tx_kick(void)
+{
+    /* The emulator pulls bytes with sim_uart_tx_take() at the link's baud rate. */
+}
+
+/* ---- EEPROM: lives as long as the instance ---- */
+
+void hal_eeprom_read(uint16_t addr, void *dst, uint16_t len)
+{
+    if ((uint32_t)addr + len > HAL_EEPROM_SIZE) {
+        memset(dst, 0xFF, len);
+        return;
+    }
+    memcpy(dst, eeprom + addr, len);
+}
+
+bool hal_eeprom_busy(void)
+{
+    return false;
+}
+
+void hal_eeprom_write_page(uint16_t addr, const void *src, uint8_t len)
+{
+    if ((uint32_t)addr + len <= HAL_EEPROM_SIZE)
+        memcpy(eeprom + addr, src, len);
+}
+
+/* ---- exports ---- */
+
+static void run_main_loop(void)
+{
+    /* Bounded: a tick is pending at most once per compare interrupt. */
+    for (uint8_t i = 0; i < 8 && app_poll(); i++) {
+    }
+}
+
+void sim_init(int32_t robot_id)
+{
+    now_ticks = 0;
+    board_id = (robot_id > 0 && robot_id < 255) ? (uint8_t)robot_id : 0;
+    if (!eeprom_ready) { /* erased once; a later sim_init is a reset that keeps it, as on the robot */
+        memset(eeprom, 0xFF, sizeof eeprom);
+        eeprom_ready = 1;
+    }
+    app_init();
+}
+
+void sim_advance(int64_t target)
+{
+    for (;;) {
+        int8_t next = -1;
+        for (uint8_t ch = 0; ch < HAL_SCHED_CHANNELS; ch++)
+            if (armed[ch] && deadline[ch] <= target && (next < 0 || deadline[ch] < deadline[next]))
+                next = (int8_t)ch;
+        if (next < 0)
+            break;
+        if (deadline[next] > now_ticks)
+            now_ticks = deadline[next];
+        armed[next] = 0;
+        if (irq_enabled)
+            scheduler_isr((uint8_t)next);
+        run_main_loop();
+    }
+    if (target > now_ticks)
+        now_ticks = target;
+    run_main_loop();
+}
+
+void sim_encoder_edge(int32_t wheel, int64_t ticks)
+{
+    if (wheel < 0 || wheel > 1 || !irq_enabled)
+        return;
+    encoder_capture_isr((uint8_t)wheel, (uint32_t)(uint64_t)(ticks / TICKS_PER_CAPTURE));
+}
+
+void sim_uart_rx(int32_t byte)
+{
+    if (irq_enabled)
+        uart_rx_isr((uint8_t)byte);
+}
+
+int32_t sim_uart_tx_take(int32_t max)
+{
+    if (max > (int32_t)sizeof tx_out)
+        max = (int32_t)sizeof tx_out;
+    int32_t n = 0;
+    while (n < max) {
+        int16_t b = uart_tx_isr();
+        if (b < 0)
+            break;
+        tx_out[n++] = (uint8_t)b;
+    }
+    return n;
+}
+
+int32_t sim_uart_tx_buffer(void)
+{
+    return (int32_t)(uintptr_t)tx_out;
+}
+
+void sim_ir_rx(int32_t side, int32_t sender_id, int32_t sender_led, int32_t power, int32_t len,
+               int32_t payload_lo, int32_t payload_hi)
+{
+    if (side < 0 || side > 1 || !irq_enabled)
+        return;
+    hal_ir_msg_t m;
+    m.sender_id = (uint8_t)sender_id;
+    m.led = (uint8_t)(sender_led & 3);
+    m.power = (uint8_t)(power < 0 ? 0 : power > 100 ? 100 : power);
+    m.len = (uint8_t)(len < 0 ? 0 : len > (int32_t)HAL_IR_PAYLOAD_MAX ? (int32_t)HAL_IR_PAYLOAD_MAX : len);
+    for (uint8_t i = 0; i < HAL_IR_PAYLOAD_MAX; i++)
+        m.data[i] = (uint8_t)((i < 4 ? (uint32_t)payload_lo >> (8 * i) : (uint32_t)payload_hi >> (8 * (i - 4))) & 0xFFu);
+    ir_rx_isr((uint8_t)side, &m);
+}
+
+int32_t sim_outputs(void)
+{
+    return (int32_t)(uintptr_t)&outputs;
+}
+
+int32_t sim_state(void)
+{
+    return (int32_t)(uintptr_t)&robot_state;
+}
+
+int32_t sim_settings(void)
+{
+    return (int32_t)(uintptr_t)&settings;
+}
+
+#if UINTPTR_MAX > 0xFFFFFFFFu
+/* Host builds (tests, fuzzer) have 64-bit pointers that the int32 addresses above cannot carry. */
+const sim_outputs_t *sim_host_outputs(void)
+{
+    return &outputs;
+}
+
+const uint8_t *sim_host_tx_buffer(void)
+{
+    return tx_out;
+}
+
+void sim_host_eeprom_erase(void)
+{
+    memset(eeprom, 0xFF, sizeof eeprom);
+    eeprom_ready = 1;
+}
+#endif

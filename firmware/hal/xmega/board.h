@@ -1,0 +1,33 @@
+/**
+ * \file board.h
+ * Pin and clock facts of the PocketBot2 board, private to hal/xmega. Everything else includes hal/hal.h.
+ */
+#ifndef HAL_XMEGA_INTERNAL
+#error "hal/xmega/board.h is private to the xmega HAL; include hal/hal.h instead"
+#endif
+#ifndef BOARD_H
+#define BOARD_H
+
+#define BOARD_F_CPU 32000000ul
+
+#define BOARD_LED_PORT PORTF
+#define BOARD_LED_MASK 0x07u              /* PF0..PF2 */
+
+#define BOARD_MOTOR_TIMER TCE0            /* PE0..PE3: left IN1/IN2, right IN1/IN2 */
+#define BOARD_MOTOR_PER 1600u             /* 32 MHz / 20 kHz PWM */
+
+#define BOARD_HOST_USART USARTC0          /* PC2 RX, PC3 TX to the Bluetooth module */
+#define BOARD_HOST_BSEL 2094u             /* 115200 Bd with BSCALE -7 */
+#define BOARD_HOST_BSCALE 0x9u
+
+#define BOARD_EMITTER_PORT PORTB          /* emitters 0..3 on PB4..PB7 */
+#define BOARD_EMITTER4_PORT PORTA         /* emitter 4 on PA3 */
+#define BOARD_EMITTER4_PIN PIN3_bm
+
+#define BOARD_IR_SELECT_PORT PORTC        /* IR LED selects on PC4..PC7: front, right, rear, left */
+#define BOARD_IR_CARRIER_PER 842u         /* 32 MHz / 38 kHz */
+#define BOARD_IR_BSEL 832u                /* 2400 Bd */
+
+#define BOARD_TCS3472_ADDR 0x29u          /* colour sensor on TWIC */
+
+#endif

@@ -1,0 +1,653 @@
+/**
+ * \file hal_xmega.c
+ * The HAL of the PocketBot2 board: ATxmega128A3 at 32 MHz.
+ *
+ * Resources:
+ * - TCC0 at clk/64 (500 kHz): the scheduler's four compare channels (CCA..CCD) and hal_micros(), its
+ *   16-bit count extended by the overflow interrupt.
+ * - Encoders: the analog comparators ACA.AC0 (left) and AC1 (right) square the reflective sensors'
+ *   signals; their output toggles reach TCD0 (clk/8, 4 MHz) through event channels 0 and 1 as input
+ *   captures on CCA and CCB. The capture interrupt only extends the timestamp and hands it on.
+ * - Motors: TCE0 single-slope PWM at 20 kHz on PE0..PE3 (left IN1/IN2, right IN1/IN2 of the H-bridges).
+ * - Host link: USARTC0 (PC2 RX, PC3 TX) at 115200 Bd to the Bluetooth module, RXC and DRE interrupts.
+ * - Line sensor: ADCA, detectors on PA4..PA7 converted in one sweep of channels 0..3; emitters on
+ *   PB4..PB7 and PA3. Slow sensors (battery, current, accelerometer, temperature) on ADCB, converted in
+ *   the background round robin; the colour sensor (TCS3472) over TWIC, read by an interrupt-driven
+ *   state machine.
+ * - IR: messages as 2400 Bd UART frames on a 38 kHz carrier (TCD1 on PD5, power = carrier duty): TX from
+ *   USARTD0 with the LED chosen by PC4..PC7; front receiver on USARTD0 RX (PD2), rear on USARTD1 RX (PD6).
+ * - EEPROM through the NVM controller, one page write at a time; LEDs on PF0..PF2.
+ */
+#include <avr/interrupt.h>
+#include <avr/io.h>
+#include <avr/sleep.h>
+#include <string.h>
+
+#include "hal/hal.h"
+
+#define HAL_XMEGA_INTERNAL
+#include "hal/xmega/board.h"
+
+/* ---- board ---------------------------------------------------------------------------------- */
+
+static void clock_init(void)
+{
+    OSC.CTRL |= OSC_RC32MEN_bm;
+    while (!(OSC.STATUS & OSC_RC32MRDY_bm)) {
+        /* boot only: the 32 MHz oscillator starts within microseconds */
+    }
+    _PROTECTED_WRITE(CLK_CTRL, CLK_SCLKSEL_RC32M_gc);
+    OSC.CTRL |= OSC_RC32KEN_bm; /* 32.768 kHz reference for the DFLL that trims the 32 MHz RC */
+    DFLLRC32M.CTRL = DFLL_ENABLE_bm;
+}
+
+static void sched_timer_init(void);
+static void encoder_init_hw(void);
+static void motors_init_hw(void);
+static void uart_init_hw(void);
+static void adc_init_hw(void);
+static void twi_init_hw(void);
+static void ir_init_hw(void);
+
+void hal_init(void)
+{
+    cli();
+    clock_init();
+    BOARD_LED_PORT.DIRSET = BOARD_LED_MASK;
+    sched_timer_init();
+    encoder_init_hw();
+    motors_init_hw();
+    uart_init_hw();
+    adc_init_hw();
+    twi_init_hw();
+    ir_init_hw();
+    PMIC.CTRL = PMIC_LOLVLEN_bm | PMIC_MEDLVLEN_bm | PMIC_HILVLEN_bm;
+}
+
+void hal_irq_enable(void)
+{
+    sei();
+}
+
+uint8_t hal_board_id(void)
+{
+    return 0; /* a robot keeps its id in EEPROM */
+}
+
+void hal_idle(void)
+{
+    SLEEP.CTRL = SLEEP_SMODE_IDLE_gc | SLEEP_SEN_bm;
+    sleep_cpu();
+    SLEEP.CTRL = 0;
+}
+
+uint8_t hal_irq_save(void)
+{
+    uint8_t s = SREG;
+    cli();
+    return s;
+}
+
+void hal_irq_restore(uint8_t saved)
+{
+    SREG = saved;
+}
+
+void hal_led_set(uint8_t mask)
+{
+    BOARD_LED_PORT.OUT = (uint8_t)((BOARD_LED_PORT.OUT & ~BOARD_LED_MASK) | (mask & BOARD_LED_MASK));
+}
+
+/* ---- scheduler timer: TCC0 at 500 kHz -------------------------------------------------------- */
+
+static volatile uint16_t sched_hi;
+
+static void sched_timer_init(void)
+{
+    TCC0.CTRLA = TC_CLKSEL_OFF_gc;
+    TCC0.CTRLB = TC_WGMODE_NORMAL_gc;
+    TCC0.PER = 0xFFFF;
+    TCC0.CNT = 0;
+    TCC0.INTCTRLA = TC_OVFINTLVL_HI_gc;
+    TCC0.INTCTRLB = 0;
+    TCC0.CTRLA = TC_CLKSEL_DIV64_gc;
+}
+
+ISR(TCC0_OVF_vect)
+{
+    sched_hi++;
+}
+
+static uint32_t sched_ticks(void)
+{
+    uint8_t s = hal_irq_save();
+    uint16_t hi = sched_hi;
+    uint16_t lo = TCC0.CNT;
+    if ((TCC0.INTFLAGS & TC0_OVFIF_bm) && lo < 0x8000u) /* wrapped, overflow interrupt still pending */
+        hi++;
+    hal_irq_restore(s);
+    return ((uint32_t)hi << 16) | lo;
+}
+
+uint32_t hal_micros(void)
+{
+    return sched_ticks() << 1;
+}
+
+static volatile uint16_t *const sched_cc[4] = {&TCC0.CCA, &TCC0.CCB, &TCC0.CCC, &TCC0.CCD};
+
+void hal_sched_arm(uint8_t ch, uint32_t at_us)
+{
+    if (ch >= HAL_SCHED_CHANNELS)
+        return;
+    uint8_t s = hal_irq_save();
+    uint32_t at = at_us >> 1;
+    int32_t ahead = (int32_t)(at - sched_ticks());
+    if (ahead < 4) /* already due: fire in a few microseconds rather than after a wrap */
+        at = sched_ticks() + 4;
+    *sched_cc[ch] = (uint16_t)at;
+    TCC0.INTFLAGS = (uint8_t)(TC0_CCAIF_bm << ch);
+    uint8_t shift = (uint8_t)(2 * ch);
+    TCC0.INTCTRLB = (uint8_t)((TCC0.INTCTRLB & ~(3u << shift)) | (TC_CCAINTLVL_MED_gc << shift));
+    hal_irq_restore(s);
+}
+
+void hal_sched_disarm(uint8_t ch)
+{
+    if (ch >= HAL_SCHED_CHANNELS)
+        return;
+    uint8_t s = hal_irq_save();
+    TCC0.INTCTRLB = (uint8_t)(TCC0.INTCTRLB & ~(3u << (2 * ch)));
+    hal_irq_restore(s);
+}
+
+static void sched_fire(uint8_t ch)
+{
+    TCC0.INTCTRLB = (uint8_t)(TCC0.INTCTRLB & ~(3u << (2 * ch))); /* one shot */
+    scheduler_isr(ch);
+}
+
+ISR(TCC0_CCA_vect) { sched_fire(0); }
+ISR(TCC0_CCB_vect) { sched_fire(1); }
+ISR(TCC0_CCC_vect) { sched_fire(2); }
+ISR(TCC0_CCD_vect) { sched_fire(3); }
+
+/* ---- encoders: AC -> event system -> TCD0 input capture at 4 MHz ----------------------------- */
+
+static volatile uint16_t capture_hi;
+
+static void encoder_init_hw(void)
+{
+    /* Comparators against a scaled VCC threshold, high-speed mode, hysteresis against stripe noise. */
+    ACA.CTRLB = 32; /* scaler: VCC * 33/64 */
+    ACA.AC0MUXCTRL = AC_MUXPOS_PIN0_gc | AC_MUXNEG_SCALER_gc;
+    ACA.AC1MUXCTRL = AC_MUXPOS_PIN1_gc | AC_MUXNEG_SCALER_gc;
+    ACA.AC0CTRL = AC_INTMODE_BOTHEDGES_gc | AC_HSMODE_bm | AC_HYSMODE_SMALL_gc | AC_ENABLE_bm;
+    ACA.AC1CTRL = AC_INTMODE_BOTHEDGES_gc | AC_HSMODE_bm | AC_HYSMODE_SMALL_gc | AC_ENABLE_bm;
+    EVSYS.CH0MUX = EVSYS_CHMUX_ACA_CH0_gc;
+    EVSYS.CH1MUX = EVSYS_CHMUX_ACA_CH1_gc;
+    EVSYS.CH0CTRL = EVSYS_DIGFILT_2SAMPLES_gc;
+    EVSYS.CH1CTRL = EVSYS_DIGFILT_2SAMPLES_gc;
+    TCD0.CTRLA = TC_CLKSEL_OFF_gc;
+    TCD0.PER = 0xFFFF;
+    TCD0.CTRLB = TC0_CCAEN_bm | TC0_CCBEN_bm | TC_WGMODE_NORMAL_gc;
+    TCD0.CTRLD = TC_EVACT_CAPT_gc | TC_EVSEL_CH0_gc; /* CCA <- event channel 0, CCB <- channel 1 */
+    TCD0.INTCTRLA = TC_OVFINTLVL_HI_gc;
+    TCD0.INTCTRLB = TC_CCAINTLVL_HI_gc | TC_CCBINTLVL_HI_gc;
+    TCD0.CTRLA = TC_CLKSEL_DIV8_gc;
+}
+
+ISR(TCD0_OVF_vect)
+{
+    capture_hi++;
+}
+
+/* Extends a 16-bit capture to 32 bits; called with interrupts masked (ISR). */
+static uint32_t extend(uint16_t lo)
+{
+    uint16_t hi = capture_hi;
+    if ((TCD0.INTFLAGS & TC0_OVFIF_bm) && lo < 0x8000u)
+        hi++;
+    return ((uint32_t)hi << 16) | lo;
+}
+
+uint32_t hal_capture_now(void)
+{
+    uint8_t s = hal_irq_save();
+    uint32_t t = extend(TCD0.CNT);
+    hal_irq_restore(s);
+    return t;
+}
+
+ISR(TCD0_CCA_vect)
+{
+    encoder_capture_isr(0, extend(TCD0.CCA));
+}
+
+ISR(TCD0_CCB_vect)
+{
+    encoder_capture_isr(1, extend(TCD0.CCB));
+}
+
+/* ---- motors: TCE0 PWM at 20 kHz ------------------------------------------------------------- */
+
+#define MOTOR_PER BOARD_MOTOR_PER
+
+static void motors_init_hw(void)
+{
+    PORTE.DIRSET = 0x0F;
+    TCE0.CTRLA = TC_CLKSEL_OFF_gc;
+    TCE0.PER = MOTOR_PER;
+    TCE0.CCA = TCE0.CCB = TCE0.CCC = TCE0.CCD = 0;
+    TCE0.CTRLB = TC0_CCAEN_bm | TC0_CCBEN_bm | TC0_CCCEN_bm | TC0_CCDEN_bm | TC_WGMODE_SS_gc;
+    TCE0.CTRLA = TC_CLKSEL_DIV1_gc;
+}
+
+static uint16_t duty_ticks(int16_t permille)
+{
+    uint16_t m = (uint16_t)(permille < 0 ? -permille : permille);
+    if (m > 1000u)
+        m = 1000u;
+    return (uint16_t)(((uint32_t)m * MOTOR_PER) / 1000u);
+}
+
+void hal_motors_set(int16_t left, int16_t right)
+{
+    /* Buffered compare registers: the new duties start with the next PWM period, glitch-free. */
+    TCE0.CCABUF = left > 0 ? duty_ticks(left) : 0;
+    TCE0.CCBBUF = left < 0 ? duty_ticks(left) : 0;
+    TCE0.CCCBUF = right > 0 ? duty_ticks(right) : 0;
+    TCE0.CCDBUF = right < 0 ? duty_ticks(right) : 0;
+}
+
+/* ---- host link: USARTC0 at 115200 Bd -------------------------------------------------------- */
+
+static void uart_init_hw(void)
+{
+    PORTC.DIRSET = PIN3_bm;
+    PORTC.OUTSET = PIN3_bm;
+    PORTC.DIRCLR = PIN2_bm;
+    /* 115200 Bd from 32 MHz: BSEL 2094, BSCALE -7 (error 0.01 %) */
+    USARTC0.BAUDCTRLA = (uint8_t)BOARD_HOST_BSEL;
+    USARTC0.BAUDCTRLB = (uint8_t)((BOARD_HOST_BSCALE << 4) | (BOARD_HOST_BSEL >> 8));
+    USARTC0.CTRLC = USART_CMODE_ASYNCHRONOUS_gc | USART_PMODE_DISABLED_gc | USART_CHSIZE_8BIT_gc;
+    USARTC0.CTRLA = USART_RXCINTLVL_MED_gc;
+    USARTC0.CTRLB = USART_RXEN_bm | USART_TXEN_bm;
+}
+
+void hal_uart_tx_kick(void)
+{
+    uint8_t s = hal_irq_save();
+    USARTC0.CTRLA = (uint8_t)((USARTC0.CTRLA & ~USART_DREINTLVL_gm) | USART_DREINTLVL_MED_gc);
+    hal_irq_restore(s);
+}
+
+ISR(USARTC0_RXC_vect)
+{
+    uart_rx_isr(USARTC0.DATA);
+}
+
+ISR(USARTC0_DRE_vect)
+{
+    int16_t b = uart_tx_isr();
+    if (b < 0)
+        USARTC0.CTRLA = (uint8_t)(USARTC0.CTRLA & ~USART_DREINTLVL_gm); /* nothing left: quiet */
+    else
+        USARTC0.DATA = (uint8_t)b;
+}
+
+/* ---- ADC: line sensor on ADCA, slow sensors on ADCB ----------------------------------------- */
+
+static volatile uint16_t line_res[HAL_LINE_DETECTORS];
+static volatile int16_t slow_raw[6];
+static volatile uint8_t slow_index;
+static volatile uint8_t colour[4];
+
+/* Slow analog inputs on ADCB: battery divider, current shunt amplifier, accelerometer x, y, z. */
+static const uint8_t slow_mux[5] = {ADC_CH_MUXPOS_PIN0_gc, ADC_CH_MUXPOS_PIN1_gc, ADC_CH_MUXPOS_PIN2_gc,
+                                    ADC_CH_MUXPOS_PIN3_gc, ADC_CH_MUXPOS_PIN4_gc};
+
+static void adc_init_hw(void)
+{
+    PORTA.DIRSET = PIN3_bm;
+    PORTB.DIRSET = 0xF0;
+    ADCA.CTRLB = ADC_RESOLUTION_12BIT_gc;
+    ADCA.REFCTRL = ADC_REFSEL_VCC_gc | ADC_TEMPREF_bm;
+    ADCA.PRESCALER = ADC_PRESCALER_DIV16_gc; /* 2 MHz: a 4-channel sweep in about 14 us */
+    ADCA.EVCTRL = ADC_SWEEP_0123_gc;
+    ADCA.CH0.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+    ADCA.CH1.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+    ADCA.CH2.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+    ADCA.CH3.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+    ADCA.CH0.MUXCTRL = ADC_CH_MUXPOS_PIN4_gc;
+    ADCA.CH1.MUXCTRL = ADC_CH_MUXPOS_PIN5_gc;
+    ADCA.CH2.MUXCTRL = ADC_CH_MUXPOS_PIN6_gc;
+    ADCA.CH3.MUXCTRL = ADC_CH_MUXPOS_PIN7_gc;
+    ADCA.CH3.INTCTRL = ADC_CH_INTLVL_LO_gc; /* the sweep ends with channel 3 */
+    ADCA.CTRLA = ADC_ENABLE_bm;
+
+    ADCB.CTRLB = ADC_RESOLUTION_12BIT_gc;
+    ADCB.REFCTRL = ADC_REFSEL_INT1V_gc | ADC_BANDGAP_bm;
+    ADCB.PRESCALER = ADC_PRESCALER_DIV256_gc;
+    ADCB.CH0.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+    ADCB.CH0.MUXCTRL = slow_mux[0];
+    ADCB.CH0.INTCTRL = ADC_CH_INTLVL_LO_gc;
+    ADCB.CTRLA = ADC_ENABLE_bm;
+    slow_index = 0;
+    ADCB.CH0.CTRL |= ADC_CH_START_bm;
+}
+
+void hal_line_emitters(uint8_t mask)
+{
+    /* Emitters 0..3 on PB4..PB7, emitter 4 on PA3. */
+    BOARD_EMITTER_PORT.OUT = (uint8_t)((BOARD_EMITTER_PORT.OUT & 0x0F) | ((mask & 0x0F) << 4));
+    if (mask & 0x10)
+        BOARD_EMITTER4_PORT.OUTSET = BOARD_EMITTER4_PIN;
+    else
+        BOARD_EMITTER4_PORT.OUTCLR = BOARD_EMITTER4_PIN;
+}
+
+void hal_line_convert(void)
+{
+    ADCA.CTRLA |= ADC_CH0START_bm | ADC_CH1START_bm | ADC_CH2START_bm | ADC_CH3START_bm;
+}
+
+ISR(ADCA_CH3_vect)
+{
+    line_res[0] = ADCA.CH0.RES;
+    line_res[1] = ADCA.CH1.RES;
+    line_res[2] = ADCA.CH2.RES;
+    line_res[3] = ADCA.CH3.RES;
+}
+
+void hal_line_results(uint16_t out[HAL_LINE_DETECTORS])
+{
+    uint8_t s = hal_irq_save();
+    for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++)
+        out[d] = line_res[d];
+    hal_irq_restore(s);
+}
+
+ISR(ADCB_CH0_vect)
+{
+    uint8_t i = slow_index;
+    slow_raw[i] = (int16_t)ADCB.CH0.RES;
+    i = (uint8_t)((i + 1u) % 6u);
+    slow_index = i;
+    if (i < 5) {
+        ADCB.CH0.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+        ADCB.CH0.MUXCTRL = slow_mux[i];
+    } else { /* the internal temperature sensor */
+        ADCB.CH0.CTRL = ADC_CH_INPUTMODE_INTERNAL_gc;
+        ADCB.CH0.MUXCTRL = ADC_CH_MUXINT_TEMP_gc;
+    }
+    ADCB.CH0.CTRL |= ADC_CH_START_bm;
+}
+
+int32_t hal_sensor_read(uint8_t sensor)
+{
+    int32_t raw;
+    uint8_t s = hal_irq_save();
+    if (sensor <= HAL_SENSOR_ACCEL_Z_MG)
+        raw = slow_raw[sensor == HAL_SENSOR_MCU_TEMP_DC ? 5 : sensor < 2 ? sensor : sensor - 1];
+    else if (sensor < HAL_SENSOR_COUNT)
+        raw = colour[sensor - HAL_SENSOR_COLOUR_R];
+    else
+        raw = 0;
+    hal_irq_restore(s);
+    /* 12-bit counts of a 1.0 V reference to physical units (board-specific dividers and gains). */
+    switch (sensor) {
+    case HAL_SENSOR_BATTERY_MV:
+        return raw * 2000 / 4095 * 3;            /* 1:3 divider */
+    case HAL_SENSOR_CURRENT_MA:
+        return raw * 1000 / 4095;                /* 1 mV per mA */
+    case HAL_SENSOR_MCU_TEMP_DC:
+        return (raw - 1400) * 10 / 4 + 250;      /* linear around the factory point */
+    case HAL_SENSOR_ACCEL_X_MG:
+    case HAL_SENSOR_ACCEL_Y_MG:
+    case HAL_SENSOR_ACCEL_Z_MG:
+        return (raw - 2048) * 1000 / 410;        /* analog accelerometer, 0.1 V/g around mid-scale */
+    default:
+        return raw;
+    }
+}
+
+/* ---- colour sensor: TCS3472 on TWIC, read continuously by the TWI interrupt ----------------- */
+
+#define TCS_ADDR BOARD_TCS3472_ADDR
+#define TCS_CMD 0x80u
+#define TCS_AUTOINC 0x20u
+#define TCS_CDATAL 0x14u
+
+static volatile uint8_t twi_step;
+static uint8_t twi_buf[8];
+
+static void twi_init_hw(void)
+{
+    TWIC.MASTER.BAUD = 155; /* 100 kHz from 32 MHz */
+    TWIC.MASTER.CTRLA = TWI_MASTER_INTLVL_LO_gc | TWI_MASTER_RIEN_bm | TWI_MASTER_WIEN_bm | TWI_MASTER_ENABLE_bm;
+    TWIC.MASTER.STATUS = TWI_MASTER_BUSSTATE_IDLE_gc;
+    /* Power on and enable the RGBC integration, then start the read cycle. */
+    twi_step = 0;
+    TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+}
+
+ISR(TWIC_TWIM_vect)
+{
+    uint8_t status = TWIC.MASTER.STATUS;
+    if (status & (TWI_MASTER_ARBLOST_bm | TWI_MASTER_BUSERR_bm)) {
+        TWIC.MASTER.STATUS = TWI_MASTER_BUSSTATE_IDLE_gc;
+        twi_step = 3;
+        TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+        return;
+    }
+    switch (twi_step) {
+    case 0: /* enable register := PON | AEN */
+        TWIC.MASTER.DATA = TCS_CMD | 0x00u;
+        twi_step = 1;
+        break;
+    case 1:
+        TWIC.MASTER.DATA = 0x03u;
+        twi_step = 2;
+        break;
+    case 2:
+        TWIC.MASTER.CTRLC = TWI_MASTER_CMD_STOP_gc;
+        twi_step = 3;
+        TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+        break;
+    case 3: /* point at CDATAL with auto-increment, then read 8 bytes */
+        TWIC.MASTER.DATA = TCS_CMD | TCS_AUTOINC | TCS_CDATAL;
+        twi_step = 4;
+        break;
+    case 4:
+        twi_step = 5;
+        TWIC.MASTER.ADDR = (uint8_t)((TCS_ADDR << 1) | 1u);
+        break;
+    default: {
+        uint8_t k = (uint8_t)(twi_step - 5u);
+        twi_buf[k] = TWIC.MASTER.DATA;
+        if (k < 7u) {
+            twi_step++;
+            TWIC.MASTER.CTRLC = TWI_MASTER_CMD_RECVTRANS_gc;
+        } else {
+            TWIC.MASTER.CTRLC = TWI_MASTER_ACKACT_bm | TWI_MASTER_CMD_STOP_gc;
+            /* 16-bit clear, red, green, blue counts to 0..255 (high bytes) */
+            colour[3] = twi_buf[1];
+            colour[0] = twi_buf[3];
+            colour[1] = twi_buf[5];
+            colour[2] = twi_buf[7];
+            twi_step = 3;
+            TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+        }
+        break;
+    }
+    }
+}
+
+/* ---- IR: USARTD0 TX on a 38 kHz carrier, receivers on USARTD0 / USARTD1 RX ------------------ */
+
+#define IR_SYNC 0xA5u
+#define IR_FRAME_MAX (5u + HAL_IR_PAYLOAD_MAX)
+#define CARRIER_PER BOARD_IR_CARRIER_PER
+
+static uint8_t ir_tx_buf[IR_FRAME_MAX];
+static volatile uint8_t ir_tx_len, ir_tx_pos;
+
+typedef struct {
+    uint8_t buf[IR_FRAME_MAX];
+    uint8_t pos;
+} ir_rx_t;
+static ir_rx_t ir_rx[2];
+
+static uint8_t crc8(const uint8_t *p, uint8_t n)
+{
+    uint8_t c = 0;
+    while (n--) {
+        c ^= *p++;
+        for (uint8_t i = 0; i < 8; i++)
+            c = (uint8_t)((c & 0x80u) ? (uint8_t)((c << 1) ^ 0x07u) : (uint8_t)(c << 1));
+    }
+    return c;
+}
+
+static void ir_init_hw(void)
+{
+    PORTC.DIRSET = 0xF0; /* LED selects */
+    PORTD.DIRSET = PIN3_bm | PIN5_bm;
+    TCD1.PER = CARRIER_PER;
+    TCD1.CCB = 0;
+    TCD1.CTRLB = TC1_CCBEN_bm | TC_WGMODE_SS_gc;
+    TCD1.CTRLA = TC_CLKSEL_DIV1_gc;
+    /* 2400 Bd: BSEL 832, BSCALE 0 */
+    USARTD0.BAUDCTRLA = (uint8_t)BOARD_IR_BSEL;
+    USARTD0.BAUDCTRLB = (uint8_t)(BOARD_IR_BSEL >> 8);
+    USARTD1.BAUDCTRLA = (uint8_t)BOARD_IR_BSEL;
+    USARTD1.BAUDCTRLB = (uint8_t)(BOARD_IR_BSEL >> 8);
+    USARTD0.CTRLC = USART_CHSIZE_8BIT_gc;
+    USARTD1.CTRLC = USART_CHSIZE_8BIT_gc;
+    USARTD0.CTRLA = USART_RXCINTLVL_LO_gc | USART_TXCINTLVL_LO_gc;
+    USARTD1.CTRLA = USART_RXCINTLVL_LO_gc;
+    USARTD0.CTRLB = USART_RXEN_bm | USART_TXEN_bm;
+    USARTD1.CTRLB = USART_RXEN_bm;
+}
+
+bool hal_ir_send(const hal_ir_msg_t *m)
+{
+    if (ir_tx_pos < ir_tx_len)
+        return false;
+    uint8_t len = m->len > HAL_IR_PAYLOAD_MAX ? HAL_IR_PAYLOAD_MAX : m->len;
+    ir_tx_buf[0] = IR_SYNC;
+    ir_tx_buf[1] = m->sender_id;
+    ir_tx_buf[2] = (uint8_t)((m->led << 4) | len);
+    ir_tx_buf[3] = m->power;
+    memcpy(ir_tx_buf + 4, m->data, len);
+    ir_tx_buf[4 + len] = crc8(ir_tx_buf + 1, (uint8_t)(3 + len));
+    PORTC.OUT = (uint8_t)((PORTC.OUT & 0x0F) | (0x10u << (m->led & 3u)));
+    TCD1.CCBBUF = (uint16_t)((uint32_t)CARRIER_PER / 2u * (m->power > 100u ? 100u : (uint16_t)m->power) / 100u);
+    ir_tx_len = (uint8_t)(5 + len);
+    ir_tx_pos = 1;
+    USARTD0.DATA = ir_tx_buf[0];
+    return true;
+}
+
+ISR(USARTD0_TXC_vect)
+{
+    if (ir_tx_pos < ir_tx_len) {
+        USARTD0.DATA = ir_tx_buf[ir_tx_pos++];
+    } else {
+        PORTC.OUTCLR = 0xF0; /* all LEDs off */
+        ir_tx_len = ir_tx_pos = 0;
+    }
+}
+
+static void ir_byte(uint8_t side, uint8_t b)
+{
+    ir_rx_t *r = &ir_rx[side];
+    if (r->pos == 0 && b != IR_SYNC)
+        return;
+    r->buf[r->pos++] = b;
+    if (r->pos < 4)
+        return;
+    uint8_t len = r->buf[2] & 0x0Fu;
+    if (len > HAL_IR_PAYLOAD_MAX) {
+        r->pos = 0;
+        return;
+    }
+    if (r->pos < 5u + len)
+        return;
+    r->pos = 0;
+    if (crc8(r->buf + 1, (uint8_t)(3 + len)) != r->buf[4 + len])
+        return;
+    hal_ir_msg_t m;
+    m.sender_id = r->buf[1];
+    m.led = r->buf[2] >> 4;
+    m.power = r->buf[3];
+    m.len = len;
+    memcpy(m.data, r->buf + 4, len);
+    ir_rx_isr(side, &m);
+}
+
+ISR(USARTD0_RXC_vect)
+{
+    ir_byte(0, USARTD0.DATA);
+}
+
+ISR(USARTD1_RXC_vect)
+{
+    ir_byte(1, USARTD1.DATA);
+}
+
+/* ---- EEPROM through the NVM controller ------------------------------------------------------ */
+
+static void nvm_exec(void)
+{
+    _PROTECTED_WRITE(NVM_CTRLA, NVM_CMDEX_bm);
+}
+
+void hal_eeprom_read(uint16_t addr, void *dst, uint16_t len)
+{
+    uint8_t *d = dst;
+    for (uint16_t i = 0; i < len; i++) {
+        uint16_t a = (uint16_t)(addr + i);
+        if (a >= HAL_EEPROM_SIZE) {
+            d[i] = 0xFF;
+            continue;
+        }
+        NVM.ADDR0 = (uint8_t)a;
+        NVM.ADDR1 = (uint8_t)(a >> 8);
+        NVM.ADDR2 = 0;
+        NVM.CMD = NVM_CMD_READ_EEPROM_gc;
+        nvm_exec();
+        d[i] = NVM.DATA0;
+    }
+    NVM.CMD = NVM_CMD_NO_OPERATION_gc;
+}
+
+bool hal_eeprom_busy(void)
+{
+    return (NVM.STATUS & NVM_NVMBUSY_bm) != 0;
+}
+
+void hal_eeprom_write_page(uint16_t addr, const void *src, uint8_t len)
+{
+    const uint8_t *s = src;
+    if (hal_eeprom_busy() || (uint32_t)addr + len > HAL_EEPROM_SIZE)
+        return;
+    NVM.CMD = NVM_CMD_ERASE_EEPROM_BUFFER_gc;
+    nvm_exec();
+    NVM.CMD = NVM_CMD_LOAD_EEPROM_BUFFER_gc;
+    for (uint8_t i = 0; i < len; i++) {
+        uint16_t a = (uint16_t)(addr + i);
+        NVM.ADDR0 = (uint8_t)a;
+        NVM.ADDR1 = (uint8_t)(a >> 8);
+        NVM.ADDR2 = 0;
+        NVM.DATA0 = s[i]; /* loads the page buffer */
+    }
+    /* Atomic erase and write of the page; the NVM controller works on while the CPU goes on. */
+    NVM.ADDR0 = (uint8_t)addr;
+    NVM.ADDR1 = (uint8_t)(addr >> 8);
+    NVM.ADDR2 = 0;
+    NVM.CMD = NVM_CMD_ERASE_WRITE_EEPROM_PAGE_gc;
+    nvm_exec();
+    NVM.CMD = NVM_CMD_NO_OPERATION_gc;
+}

@@ -1,0 +1,36 @@
+#include "failsafe.h"
+
+#include "modules/debug.h"
+#include "modules/line_follower.h"
+#include "modules/locomotion.h"
+#include "modules/reflector.h"
+#include "modules/settings.h"
+
+static uint32_t last_seen_ms;
+
+void failsafe_init(void)
+{
+    last_seen_ms = robot_state.time.time_ms;
+}
+
+void failsafe_host_seen(void)
+{
+    last_seen_ms = robot_state.time.time_ms;
+}
+
+void failsafe_task(void)
+{
+    uint16_t timeout = settings.link.failsafe_timeout_ms;
+    if (timeout == 0 || robot_state.time.time_ms - last_seen_ms < timeout)
+        return;
+    uint8_t mode = robot_state.locomotion.mode;
+    bool host_driven = mode == PB_LOCO_MODE_MOVEMENT || mode == PB_LOCO_MODE_TELEOP;
+    if (mode == PB_LOCO_MODE_LINE_FOLLOW && !settings.line_follow.autonomous) {
+        line_follower_stop();
+        host_driven = true;
+    }
+    if (host_driven) {
+        locomotion_failsafe();
+        DEBUG_PRINT(MAIN, 1, "failsafe: no host packet for %u ms", timeout);
+    }
+}

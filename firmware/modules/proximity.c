@@ -1,0 +1,203 @@
+#include "proximity.h"
+
+#include <string.h>
+
+#include "drivers/ir.h"
+#include "modules/comm.h"
+#include "modules/reflector.h"
+#include "modules/scheduler.h"
+#include "modules/settings.h"
+
+#define LEDS 4u
+#define LEVELS 3u
+
+typedef struct {
+    uint8_t robot_id;
+    uint8_t led;
+    uint8_t led_class;          /* class of the message led came from */
+    uint32_t class_ms[4];       /* when each distance class was last heard (index = class) */
+    uint32_t robot_ms;          /* when the robot was last heard */
+    uint32_t obstacle_ms;       /* when our own reflection was last heard */
+    uint8_t heard_robot, heard_obstacle;
+} side_t;
+
+static side_t sides[2];
+
+/* Beacon transmission, driven from the scheduler interrupts. */
+static volatile uint8_t burst_msg;    /* next message of the running beacon */
+static volatile uint8_t burst_msgs;   /* messages in it */
+static uint8_t level;                 /* power level of the next beacon */
+static hal_ir_msg_t payload_msg;      /* pending payload, len > 0 while pending */
+static volatile uint8_t payload_pending, payload_in_burst;
+
+/* Last payload forwarded, to drop the copies a beacon carries from its four LEDs. */
+static struct {
+    uint8_t sender, len;
+    uint8_t data[HAL_IR_PAYLOAD_MAX];
+    uint32_t ms;
+} last_fwd;
+
+uint8_t proximity_distance_class(uint8_t power)
+{
+    if (power <= 25u)
+        return PB_DISTANCE_CLASS_NEAR;
+    if (power <= 50u)
+        return PB_DISTANCE_CLASS_MID;
+    return PB_DISTANCE_CLASS_FAR;
+}
+
+static void send_next(void)
+{
+    uint8_t k = burst_msg;
+    if (k >= burst_msgs)
+        return;
+    hal_ir_msg_t m;
+    uint8_t full = settings.proximity.ir_power > 100u ? 100u : settings.proximity.ir_power;
+    if (k < LEDS) {
+        m.sender_id = settings.identity.robot_id;
+        m.led = k;
+        m.power = (uint8_t)(full >> level); /* 100, 50, 25 % of the set power */
+        if (m.power == 0)
+            m.power = 1;
+        m.len = 0;
+    } else {
+        memcpy(&m, &payload_msg, sizeof m);
+        m.sender_id = settings.identity.robot_id;
+        m.led = (uint8_t)(k - LEDS);
+    }
+    if (!ir_transmit(&m)) { /* transmitter still busy: try again shortly */
+        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_SPACING_US / 4u, send_next);
+        return;
+    }
+    robot_state.indicators.ir_power = m.power;
+    burst_msg = (uint8_t)(k + 1u);
+    if (burst_msg < burst_msgs)
+        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_SPACING_US, send_next);
+    else if (payload_in_burst)
+        payload_pending = payload_in_burst = 0;
+}
+
+static void beacon(void)
+{
+    uint16_t period = settings.proximity.beacon_period_ms < 10u ? 10u : settings.proximity.beacon_period_ms;
+    scheduler_again(SCHED_CH_PROX_BEACON, (uint32_t)period * 1000u, beacon);
+    if (settings.proximity.ir_power == 0 || burst_msg < burst_msgs)
+        return; /* off, or the previous beacon is still going out */
+    level = (uint8_t)((level + 1u) % LEVELS);
+    burst_msg = 0;
+    payload_in_burst = payload_pending;
+    burst_msgs = (uint8_t)(payload_in_burst ? 2u * LEDS : LEDS);
+    send_next();
+}
+
+void proximity_init(void)
+{
+    memset(sides, 0, sizeof sides);
+    memset(&last_fwd, 0, sizeof last_fwd);
+    burst_msg = burst_msgs = 0;
+    level = 0;
+    payload_pending = payload_in_burst = 0;
+    ir_init();
+    scheduler_after(SCHED_CH_PROX_BEACON, 1000u * (uint32_t)settings.proximity.beacon_period_ms, beacon);
+}
+
+uint8_t proximity_send_payload(uint8_t power, const uint8_t *data, uint8_t len)
+{
+    if (power < 1u || power > 100u || len > HAL_IR_PAYLOAD_MAX)
+        return PB_ERROR_CODE_BAD_ARGUMENT;
+    if (payload_pending)
+        return PB_ERROR_CODE_BUSY;
+    payload_msg.power = power;
+    payload_msg.len = len;
+    memset(payload_msg.data, 0, sizeof payload_msg.data);
+    memcpy(payload_msg.data, data, len);
+    payload_pending = 1;
+    return PB_ERROR_CODE_NONE;
+}
+
+static void forward_payload(uint8_t side, const hal_ir_msg_t *m, uint32_t now)
+{
+    if (last_fwd.sender == m->sender_id && last_fwd.len == m->len && memcmp(last_fwd.data, m->data, m->len) == 0 &&
+        now - last_fwd.ms < settings.proximity.beacon_period_ms)
+        return;
+    last_fwd.sender = m->sender_id;
+    last_fwd.len = m->len;
+    memcpy(last_fwd.data, m->data, m->len);
+    last_fwd.ms = now;
+    pb_ir_received_t r;
+    r.sender_id = m->sender_id;
+    r.side = side;
+    r.sender_led = m->led;
+    r.power = m->power;
+    memcpy(r.data, m->data, m->len);
+    comm_send(PB_PKT_IR_RECEIVED, &r, (uint8_t)(PB_IR_RECEIVED_MIN_SIZE + m->len));
+}
+
+static void heard(uint8_t side_no, const hal_ir_msg_t *m, uint32_t now)
+{
+    side_t *s = &sides[side_no];
+    uint16_t hold = settings.proximity.hold_ms;
+    if (m->sender_id == settings.identity.robot_id) {
+        s->obstacle_ms = now;
+        s->heard_obstacle = 1;
+        return;
+    }
+    if (m->len)
+        forward_payload(side_no, m, now);
+    uint8_t cls = proximity_distance_class(m->power);
+    bool current = s->heard_robot && now - s->robot_ms < hold;
+    if (current && m->sender_id != s->robot_id) {
+        /* Another robot: it takes the receiver only if at least as near as the one held. */
+        uint8_t held = 0;
+        for (uint8_t c = 3; c > 0 && !held; c--)
+            if (s->class_ms[c] && now - s->class_ms[c] < hold)
+                held = c;
+        if (cls < held)
+            return;
+        current = false;
+    }
+    if (!current) {
+        memset(s->class_ms, 0, sizeof s->class_ms);
+        s->led_class = 0;
+        s->robot_id = m->sender_id;
+    }
+    s->heard_robot = 1;
+    s->robot_ms = now;
+    s->class_ms[cls] = now ? now : 1u;
+    if (cls >= s->led_class || now - s->class_ms[s->led_class] >= hold) {
+        s->led = m->led; /* the LED heard at the lowest power faces us most directly */
+        s->led_class = cls;
+    }
+}
+
+static void publish(pb_proximity_side_t *out, side_t *s, uint32_t now)
+{
+    uint16_t hold = settings.proximity.hold_ms;
+    uint8_t flags = 0;
+    if (s->heard_obstacle && now - s->obstacle_ms < hold)
+        flags |= PROXIMITY_FLAG_OBSTACLE;
+    uint8_t cls = PB_DISTANCE_CLASS_NONE;
+    if (s->heard_robot && now - s->robot_ms < hold) {
+        flags |= PROXIMITY_FLAG_ROBOT;
+        for (uint8_t c = 3; c > 0 && cls == PB_DISTANCE_CLASS_NONE; c--)
+            if (s->class_ms[c] && now - s->class_ms[c] < hold)
+                cls = c;
+    } else {
+        s->heard_robot = 0;
+    }
+    out->flags = flags;
+    out->robot_id = (flags & PROXIMITY_FLAG_ROBOT) ? s->robot_id : 0;
+    out->robot_led = (flags & PROXIMITY_FLAG_ROBOT) ? s->led : 0;
+    out->distance = cls;
+}
+
+void proximity_task(void)
+{
+    uint32_t now = robot_state.time.time_ms;
+    uint8_t side;
+    hal_ir_msg_t m;
+    while (ir_receive(&side, &m))
+        heard(side, &m, now);
+    publish(&robot_state.proximity.front, &sides[0], now);
+    publish(&robot_state.proximity.rear, &sides[1], now);
+}

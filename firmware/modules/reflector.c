@@ -1,0 +1,50 @@
+#include "reflector.h"
+
+#include <string.h>
+
+#include "modules/comm.h"
+#include "modules/settings.h"
+
+pb_robot_state_t robot_state;
+static uint32_t last_sent_ms;
+
+void reflector_init(void)
+{
+    last_sent_ms = robot_state.time.time_ms;
+}
+
+uint8_t reflector_set_sync(uint8_t mode, uint16_t period_ms)
+{
+    if (mode > PB_SYNC_MODE_REDUCED || period_ms < 1 || period_ms > 60000u)
+        return PB_ERROR_CODE_BAD_ARGUMENT;
+    settings.sync.mode = mode;
+    settings.sync.period_ms = period_ms;
+    settings_generation++;
+    return PB_ERROR_CODE_NONE;
+}
+
+void reflector_task(void)
+{
+    uint32_t now = robot_state.time.time_ms;
+    uint16_t period = settings.sync.period_ms ? settings.sync.period_ms : 1u;
+    if (settings.sync.mode == PB_SYNC_MODE_NONE || now - last_sent_ms < period)
+        return;
+    /* Keep the cadence; after a long pause (mode change) restart from now. */
+    last_sent_ms = (now - last_sent_ms < 2u * period) ? last_sent_ms + period : now;
+    bool sent;
+    if (settings.sync.mode == PB_SYNC_MODE_FULL) {
+        sent = comm_send(PB_PKT_STATE_FULL, &robot_state, sizeof robot_state);
+    } else {
+        pb_state_reduced_t r;
+        r.time_ms = robot_state.time.time_ms;
+        r.encoder_left = robot_state.encoders.left;
+        r.encoder_right = robot_state.encoders.right;
+        r.speed_left_mmps = robot_state.wheels.speed_left_mmps;
+        r.speed_right_mmps = robot_state.wheels.speed_right_mmps;
+        r.line_position = robot_state.line.position;
+        r.line_flags = robot_state.line.flags;
+        sent = comm_send(PB_PKT_STATE_REDUCED, &r, sizeof r);
+    }
+    if (sent)
+        robot_state.time.tick_max_us = 0;
+}

@@ -1,0 +1,129 @@
+#include "scheduler.h"
+
+#include "hal/hal.h"
+#include "modules/reflector.h"
+#include "modules/settings.h"
+
+typedef struct {
+    scheduler_cb_t cb;
+    uint32_t target; /* when the callback is due */
+    uint32_t fired;  /* when it last fired (basis of scheduler_again) */
+    uint8_t active;
+} channel_t;
+
+static channel_t channels[HAL_SCHED_CHANNELS];
+static volatile uint8_t ticks_pending;
+static volatile uint8_t late_ticks;
+static uint32_t tick_start;
+
+static void arm(uint8_t ch)
+{
+    channel_t *c = &channels[ch];
+    uint32_t now = hal_micros();
+    int32_t left = (int32_t)(c->target - now);
+    if (left > (int32_t)HAL_SCHED_MAX_DELAY_US)
+        hal_sched_arm(ch, now + HAL_SCHED_MAX_DELAY_US);
+    else
+        hal_sched_arm(ch, c->target);
+}
+
+uint16_t scheduler_period_us(void)
+{
+    uint16_t p = settings.scheduler.main_period_us;
+    return p < 500u ? 500u : p > 20000u ? 20000u : p;
+}
+
+static void main_tick(void)
+{
+    if (ticks_pending)
+        late_ticks++; /* the previous tick has not finished: an overrun */
+    else
+        ticks_pending = 1;
+    scheduler_again(SCHED_CH_MAIN, scheduler_period_us(), main_tick);
+}
+
+void scheduler_init(void)
+{
+    for (uint8_t i = 0; i < HAL_SCHED_CHANNELS; i++) {
+        channels[i].active = 0;
+        hal_sched_disarm(i);
+    }
+    ticks_pending = 0;
+    late_ticks = 0;
+    channels[SCHED_CH_MAIN].fired = hal_micros();
+    scheduler_again(SCHED_CH_MAIN, scheduler_period_us(), main_tick);
+}
+
+void scheduler_after(uint8_t ch, uint32_t delay_us, scheduler_cb_t cb)
+{
+    uint8_t s = hal_irq_save();
+    channel_t *c = &channels[ch];
+    c->cb = cb;
+    c->target = hal_micros() + delay_us;
+    c->active = 1;
+    arm(ch);
+    hal_irq_restore(s);
+}
+
+void scheduler_again(uint8_t ch, uint32_t period_us, scheduler_cb_t cb)
+{
+    uint8_t s = hal_irq_save();
+    channel_t *c = &channels[ch];
+    c->cb = cb;
+    c->target = c->fired + period_us;
+    /* After a long stall, restart from now rather than firing a burst of stale events. */
+    if ((int32_t)(c->target - hal_micros()) < -(int32_t)period_us)
+        c->target = hal_micros() + period_us;
+    c->active = 1;
+    arm(ch);
+    hal_irq_restore(s);
+}
+
+void scheduler_cancel(uint8_t ch)
+{
+    uint8_t s = hal_irq_save();
+    channels[ch].active = 0;
+    hal_sched_disarm(ch);
+    hal_irq_restore(s);
+}
+
+void scheduler_isr(uint8_t ch)
+{
+    if (ch >= HAL_SCHED_CHANNELS)
+        return;
+    channel_t *c = &channels[ch];
+    if (!c->active)
+        return;
+    if ((int32_t)(c->target - hal_micros()) > 0) { /* an intermediate wake-up of a long delay */
+        arm(ch);
+        return;
+    }
+    c->active = 0;
+    c->fired = c->target;
+    c->cb();
+}
+
+bool scheduler_tick_begin(void)
+{
+    if (!ticks_pending)
+        return false;
+    tick_start = hal_micros();
+    return true;
+}
+
+void scheduler_tick_end(void)
+{
+    uint32_t took = hal_micros() - tick_start;
+    uint8_t s = hal_irq_save();
+    ticks_pending = 0;
+    uint8_t late = late_ticks;
+    late_ticks = 0;
+    hal_irq_restore(s);
+    if (took > scheduler_period_us())
+        late = late ? late : 1;
+    robot_state.time.overruns = (uint16_t)(robot_state.time.overruns + late);
+    if (took > 0xFFFFu)
+        took = 0xFFFFu;
+    if (took > robot_state.time.tick_max_us)
+        robot_state.time.tick_max_us = (uint16_t)took;
+}

@@ -1,0 +1,82 @@
+#include "slip.h"
+
+void slip_decoder_init(slip_decoder_t *d)
+{
+    d->len = 0;
+    d->escaped = 0;
+    d->broken = 0;
+    d->delivered = 0;
+}
+
+slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte)
+{
+    if (d->delivered) {
+        d->delivered = 0;
+        d->len = 0;
+    }
+    if (byte == SLIP_END) {
+        slip_result_t r = SLIP_NONE;
+        if (d->broken || d->escaped)
+            r = SLIP_ERROR;
+        else if (d->len)
+            r = SLIP_FRAME;
+        /* A delivered frame stays readable in buf until the next byte arrives. */
+        d->escaped = 0;
+        d->broken = 0;
+        d->delivered = (r == SLIP_FRAME);
+        if (!d->delivered)
+            d->len = 0;
+        return r;
+    }
+    if (d->broken)
+        return SLIP_NONE;
+    if (d->escaped) {
+        d->escaped = 0;
+        if (byte == SLIP_ESC_END)
+            byte = SLIP_END;
+        else if (byte == SLIP_ESC_ESC)
+            byte = SLIP_ESC;
+        else {
+            d->broken = 1;
+            return SLIP_NONE;
+        }
+    } else if (byte == SLIP_ESC) {
+        d->escaped = 1;
+        return SLIP_NONE;
+    }
+    if (d->len >= sizeof d->buf) {
+        d->broken = 1;
+        return SLIP_NONE;
+    }
+    d->buf[d->len++] = byte;
+    return SLIP_NONE;
+}
+
+uint16_t slip_encoded_size(const uint8_t *frame, uint16_t n)
+{
+    uint16_t size = (uint16_t)(n + 2u);
+    for (uint16_t i = 0; i < n; i++)
+        if (frame[i] == SLIP_END || frame[i] == SLIP_ESC)
+            size++;
+    return size;
+}
+
+uint16_t slip_encode(uint8_t *out, const uint8_t *frame, uint16_t n)
+{
+    uint16_t k = 0;
+    out[k++] = SLIP_END;
+    for (uint16_t i = 0; i < n; i++) {
+        uint8_t b = frame[i];
+        if (b == SLIP_END) {
+            out[k++] = SLIP_ESC;
+            out[k++] = SLIP_ESC_END;
+        } else if (b == SLIP_ESC) {
+            out[k++] = SLIP_ESC;
+            out[k++] = SLIP_ESC_ESC;
+        } else {
+            out[k++] = b;
+        }
+    }
+    out[k++] = SLIP_END;
+    return k;
+}

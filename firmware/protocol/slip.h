@@ -1,0 +1,47 @@
+/**
+ * \file slip.h
+ * SLIP (RFC 1055) framing of the serial link: END 0xC0 before and after every frame, ESC 0xDB,
+ * ESC_END 0xDC, ESC_ESC 0xDD.
+ */
+#ifndef SLIP_H
+#define SLIP_H
+
+#include <stdint.h>
+
+#include "pb_protocol.h"
+
+#define SLIP_END 0xC0u
+#define SLIP_ESC 0xDBu
+#define SLIP_ESC_END 0xDCu
+#define SLIP_ESC_ESC 0xDDu
+
+/** Result of feeding one byte to the decoder. */
+typedef enum {
+    SLIP_NONE = 0,     /**< nothing complete yet */
+    SLIP_FRAME,        /**< a frame is complete in buf[0..len) */
+    SLIP_ERROR         /**< a frame was dropped: bad escape or longer than the buffer */
+} slip_result_t;
+
+/** Decoder state; the buffer holds the largest protocol frame. */
+typedef struct {
+    uint8_t buf[PB_MAX_FRAME];
+    uint8_t len;
+    uint8_t escaped;   /**< the previous byte was ESC */
+    uint8_t broken;    /**< the frame is dropped at the next END */
+    uint8_t delivered; /**< buf holds a delivered frame; the next byte starts a new one */
+} slip_decoder_t;
+
+void slip_decoder_init(slip_decoder_t *d);
+
+/** Feeds one received byte. Empty frames (END END) are ignored.
+ *  \return SLIP_FRAME when END completes a frame (valid until the next call), SLIP_ERROR when it completes
+ *  a broken one. */
+slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte);
+
+/** \return the size of `frame` once SLIP-encoded, both ENDs included. */
+uint16_t slip_encoded_size(const uint8_t *frame, uint16_t n);
+
+/** SLIP-encodes `frame` into `out` (room for slip_encoded_size() bytes). \return bytes written. */
+uint16_t slip_encode(uint8_t *out, const uint8_t *frame, uint16_t n);
+
+#endif

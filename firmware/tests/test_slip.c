@@ -1,0 +1,91 @@
+#include <string.h>
+
+#include "harness.h"
+#include "protocol/slip.h"
+
+static int feed(slip_decoder_t *d, const uint8_t *b, int n, int *errors, uint8_t *last, int *last_len)
+{
+    int frames = 0;
+    for (int i = 0; i < n; i++) {
+        slip_result_t r = slip_decode(d, b[i]);
+        if (r == SLIP_FRAME) {
+            frames++;
+            memcpy(last, d->buf, d->len);
+            *last_len = d->len;
+        } else if (r == SLIP_ERROR) {
+            (*errors)++;
+        }
+    }
+    return frames;
+}
+
+static void split_stream_gives_one_frame(void)
+{
+    const uint8_t frame[] = {0x01, 0xC0, 0xDB, 0x02};
+    uint8_t enc[16], last[200];
+    uint16_t n = slip_encode(enc, frame, 4);
+    CHECK(n == 8, "encoded %u", n);
+    slip_decoder_t d;
+    slip_decoder_init(&d);
+    int errors = 0, len = 0, frames = 0;
+    for (uint16_t i = 0; i < n; i++) /* byte by byte, as the UART delivers it */
+        frames += feed(&d, enc + i, 1, &errors, last, &len);
+    CHECK(frames == 1 && errors == 0 && len == 4 && memcmp(last, frame, 4) == 0, "frames %d errors %d", frames,
+          errors);
+}
+
+static void merged_frames_and_empty_frames(void)
+{
+    const uint8_t stream[] = {0xC0, 0xC0, 0xC0, 1, 2, 0xC0, 3, 0xC0, 0xC0, 4, 5, 6, 0xC0};
+    slip_decoder_t d;
+    slip_decoder_init(&d);
+    uint8_t last[200];
+    int errors = 0, len = 0;
+    int frames = feed(&d, stream, sizeof stream, &errors, last, &len);
+    CHECK(frames == 3 && errors == 0, "frames %d errors %d", frames, errors);
+    CHECK(len == 3 && last[0] == 4 && last[2] == 6, "last frame");
+}
+
+static void oversized_frame_is_dropped_and_the_next_one_survives(void)
+{
+    slip_decoder_t d;
+    slip_decoder_init(&d);
+    uint8_t big[400], last[200];
+    memset(big, 0x11, sizeof big);
+    big[sizeof big - 1] = 0xC0;
+    int errors = 0, len = 0;
+    int frames = feed(&d, big, sizeof big, &errors, last, &len);
+    CHECK(frames == 0 && errors == 1, "frames %d errors %d", frames, errors);
+    const uint8_t ok[] = {7, 8, 0xC0};
+    frames = feed(&d, ok, 3, &errors, last, &len);
+    CHECK(frames == 1 && len == 2 && last[0] == 7, "recovered");
+    /* Exactly the largest frame fits. */
+    uint8_t edge[PB_MAX_FRAME + 1];
+    memset(edge, 0x22, sizeof edge);
+    edge[PB_MAX_FRAME] = 0xC0;
+    frames = feed(&d, edge, sizeof edge, &errors, last, &len);
+    CHECK(frames == 1 && len == PB_MAX_FRAME, "largest frame %d %d", frames, len);
+}
+
+static void corrupted_escapes_drop_the_frame(void)
+{
+    const uint8_t bad1[] = {1, 0xDB, 0x00, 2, 0xC0}; /* ESC followed by a non-escape */
+    const uint8_t bad2[] = {1, 2, 0xDB, 0xC0};       /* ESC then END */
+    slip_decoder_t d;
+    slip_decoder_init(&d);
+    uint8_t last[200];
+    int errors = 0, len = 0;
+    CHECK(feed(&d, bad1, sizeof bad1, &errors, last, &len) == 0 && errors == 1, "bad escape");
+    CHECK(feed(&d, bad2, sizeof bad2, &errors, last, &len) == 0 && errors == 2, "escape then end");
+    const uint8_t ok[] = {0xDB, 0xDD, 0xDB, 0xDC, 0xC0};
+    CHECK(feed(&d, ok, sizeof ok, &errors, last, &len) == 1 && len == 2 && last[0] == 0xDB && last[1] == 0xC0,
+          "escapes decode");
+}
+
+void suite_slip(void)
+{
+    RUN(split_stream_gives_one_frame);
+    RUN(merged_frames_and_empty_frames);
+    RUN(oversized_frame_is_dropped_and_the_next_one_survives);
+    RUN(corrupted_escapes_drop_the_frame);
+}

@@ -1,0 +1,56 @@
+// Loads build/wasm/pocketbot.wasm the way the emulator does and checks the sim_abi.h contract:
+// exactly the declared exports and env imports, hello at reset, state packets, IR beacons, motor outputs.
+'use strict';
+const fs = require('fs');
+const path = process.argv[2];
+const mod = new WebAssembly.Module(fs.readFileSync(path));
+let failures = 0;
+function check(cond, msg) { if (!cond) { failures++; console.log('FAIL wasm: ' + msg); } }
+
+const exportsWanted = ['memory', 'sim_init', 'sim_advance', 'sim_encoder_edge', 'sim_uart_rx', 'sim_uart_tx_take',
+  'sim_uart_tx_buffer', 'sim_ir_rx', 'sim_outputs', 'sim_state', 'sim_settings'];
+const exportsHave = WebAssembly.Module.exports(mod).map(e => e.name).sort();
+check(JSON.stringify(exportsHave) === JSON.stringify(exportsWanted.slice().sort()), 'exports ' + exportsHave);
+const importsHave = WebAssembly.Module.imports(mod).map(i => i.module + '.' + i.name).sort();
+check(JSON.stringify(importsHave) === JSON.stringify(['env.ir_send', 'env.line_adc', 'env.sensor_read']),
+  'imports ' + importsHave);
+
+const ir = [];
+const inst = new WebAssembly.Instance(mod, { env: {
+  line_adc: (d, e) => 300 + (e ? 100 : 0),
+  sensor_read: s => (s === 0 ? 3700 : 100),
+  ir_send: (...a) => ir.push(a) } });
+const x = inst.exports;
+x.sim_init(7);
+const bytes = [];
+const TICKS_PER_MS = 32000n;
+for (let ms = 1n; ms <= 250n; ms++) {
+  x.sim_advance(ms * TICKS_PER_MS);
+  const n = x.sim_uart_tx_take(64);
+  bytes.push(...new Uint8Array(x.memory.buffer, x.sim_uart_tx_buffer(), n));
+}
+const frames = [];
+let cur = [];
+for (const b of bytes) { if (b === 0xc0) { if (cur.length) frames.push(cur); cur = []; } else cur.push(b); }
+check(frames.length >= 3 && frames[0][0] === 0x01, 'hello first, then state: ' + frames.map(f => f[0]));
+check(String.fromCharCode(...frames[0].slice(4, 15)) === 'PocketBot-7', 'name of robot 7');
+check(frames.filter(f => f[0] === 0x02).length === 2, 'two full state packets in 250 ms');
+const state = new DataView(x.memory.buffer, x.sim_state(), 88);
+check(state.getUint32(0, true) === 250, 'time_ms ' + state.getUint32(0, true));
+check(state.getUint16(64, true) === 3700, 'battery in the state');
+check(ir.length >= 20 && ir.every(m => m[0] === 7), 'IR beacons from robot 7: ' + ir.length);
+const settings = new DataView(x.memory.buffer, x.sim_settings(), 169);
+check(settings.getUint8(0) === 7, 'settings.identity.robot_id');
+// Teleoperation: wheel_speeds 0.1 / 0.1 m/s -> positive PWM on both motors.
+const frame = [0x24, 0, 8];
+const p = new DataView(new ArrayBuffer(8)); p.setFloat32(0, 0.1, true); p.setFloat32(4, 0.1, true);
+frame.push(...new Uint8Array(p.buffer));
+let crc = 0xffff;
+for (const b of frame) { crc ^= b << 8; for (let i = 0; i < 8; i++) crc = (crc & 0x8000) ? ((crc << 1) ^ 0x1021) & 0xffff : (crc << 1) & 0xffff; }
+frame.push(crc & 0xff, crc >> 8);
+for (const b of [0xc0, ...frame, 0xc0]) x.sim_uart_rx(b);
+x.sim_advance(260n * TICKS_PER_MS);
+const out = new DataView(x.memory.buffer, x.sim_outputs(), 6);
+check(out.getInt16(0, true) > 0 && out.getInt16(2, true) > 0, 'motors driven: ' + out.getInt16(0, true));
+console.log(failures ? `wasm contract: ${failures} failed` : 'wasm contract: exports, imports and behaviour as in sim_abi.h');
+process.exit(failures ? 1 : 0);

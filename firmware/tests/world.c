@@ -1,0 +1,239 @@
+#include "world.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "protocol/pb_frame.h"
+#include "protocol/slip.h"
+
+world_t world;
+host_frame_t host_frames[WORLD_MAX_FRAMES];
+int host_frame_count;
+int host_bad_frames;
+static slip_decoder_t host_rx;
+static void take(int32_t max);
+
+#define TICKS_PER_S 32000000.0
+#define WHEEL_D 0.009
+#define PPR 40
+#define BASE 0.026
+#define SENSOR_AHEAD 0.020   /* line sensor ahead of the wheel axis */
+#define SPOT_PITCH 0.003
+
+static double pulse_len(void)
+{
+    return M_PI * WHEEL_D / PPR;
+}
+
+/* Stripe edges alternate long and short stripes. */
+static double stripe(int index)
+{
+    double mean = pulse_len();
+    return (index & 1) ? mean * (2.0 - world.stripe_ratio) : mean * world.stripe_ratio;
+}
+
+void world_reset(int32_t robot_id)
+{
+    memset(&world, 0, sizeof world);
+    world.max_speed = 0.5;
+    world.tau = 0.02;
+    world.deadband = 30;
+    world.stripe_ratio = 1.15;
+    world.line_width = 0.015;
+    world.ambient = 300;
+    world.link_bytes_per_ms = 12; /* 115200 baud */
+    world.colour[0] = world.colour[1] = world.colour[2] = world.colour[3] = 230;
+    world.sensors[0] = 3900;
+    world.sensors[1] = 120;
+    world.sensors[2] = 285;
+    world.sensors[5] = 1000;
+    for (int w = 0; w < 2; w++) {
+        world.next_edge[w] = stripe(0);
+        world.prev_edge[w] = 0.0;
+        world.edge_index[w] = 0;
+    }
+    host_clear();
+    slip_decoder_init(&host_rx);
+    sim_host_eeprom_erase();
+    sim_init(robot_id);
+}
+
+double world_heading_deg(void)
+{
+    return world.theta * 180.0 / M_PI;
+}
+
+static const sim_outputs_t *outputs(void)
+{
+    return sim_host_outputs();
+}
+
+static void step(double dt)
+{
+    const sim_outputs_t *o = outputs();
+    int duty[2] = {o->pwm_left, o->pwm_right};
+    int64_t t0 = world.now;
+    for (int w = 0; w < 2; w++) {
+        double goal = abs(duty[w]) < world.deadband ? 0.0 : world.max_speed * duty[w] / 1000.0;
+        world.v[w] += (goal - world.v[w]) * (dt / world.tau);
+        double old = world.pos[w];
+        world.pos[w] += world.v[w] * dt;
+        /* Edges crossed during this step, each at its interpolated time. */
+        while (world.pos[w] >= world.next_edge[w]) {
+            double frac = (world.next_edge[w] - old) / (world.pos[w] - old);
+            int64_t t = t0 + (int64_t)(frac * dt * TICKS_PER_S);
+            sim_advance(t);
+            sim_encoder_edge(w, t);
+            world.prev_edge[w] = world.next_edge[w];
+            world.edge_index[w]++;
+            world.next_edge[w] += stripe(world.edge_index[w]);
+        }
+        while (world.pos[w] < world.prev_edge[w]) {
+            double frac = (old - world.prev_edge[w]) / (old - world.pos[w]);
+            int64_t t = t0 + (int64_t)(frac * dt * TICKS_PER_S);
+            sim_advance(t);
+            sim_encoder_edge(w, t);
+            world.next_edge[w] = world.prev_edge[w];
+            world.edge_index[w]--;
+            world.prev_edge[w] -= stripe(world.edge_index[w]);
+        }
+    }
+    double v = (world.v[0] + world.v[1]) / 2.0;
+    double om = (world.v[1] - world.v[0]) / BASE;
+    world.x += v * cos(world.theta) * dt;
+    world.y += v * sin(world.theta) * dt;
+    world.theta += om * dt;
+    world.now = t0 + (int64_t)(dt * TICKS_PER_S);
+    sim_advance(world.now);
+}
+
+void world_run_ms(int ms)
+{
+    for (int i = 0; i < ms; i++) {
+        for (int k = 0; k < 10; k++)
+            step(0.0001);
+        take(world.link_bytes_per_ms);
+    }
+}
+
+/* ---- imports of sim_abi.h ---- */
+
+static int spot_on_line(int spot)
+{
+    if (!world.line_enabled)
+        return 0;
+    double lateral = (3.5 - spot) * SPOT_PITCH; /* spot 0 is leftmost: +y in the robot frame */
+    double sx = world.x + SENSOR_AHEAD * cos(world.theta) - lateral * sin(world.theta);
+    double sy = world.y + SENSOR_AHEAD * sin(world.theta) + lateral * cos(world.theta);
+    (void)sx;
+    return fabs(sy - world.line_y) <= world.line_width / 2.0;
+}
+
+int32_t line_adc(int32_t detector, int32_t emitters)
+{
+    if (emitters >= 0 && emitters < 32)
+        world.emitter_masks_seen |= 1 << emitters;
+    int32_t v = world.ambient;
+    for (int k = 0; k < 2; k++) {
+        int emitter = detector + k;
+        int spot = 2 * detector + k;
+        if (emitters & (1 << emitter))
+            v += spot_on_line(spot) ? 2000 : 100;
+    }
+    return v > 4095 ? 4095 : v;
+}
+
+int32_t sensor_read(int32_t sensor)
+{
+    if (sensor >= SIM_SENSOR_COLOUR_R && sensor <= SIM_SENSOR_COLOUR_CLEAR)
+        return world.colour[sensor - SIM_SENSOR_COLOUR_R];
+    return (sensor >= 0 && sensor < 10) ? world.sensors[sensor] : 0;
+}
+
+void ir_send(int32_t sender_id, int32_t led, int32_t power, int32_t len, int32_t payload_lo, int32_t payload_hi)
+{
+    if (world.ir_count >= WORLD_MAX_IR)
+        return;
+    world.ir[world.ir_count].sender = sender_id;
+    world.ir[world.ir_count].led = led;
+    world.ir[world.ir_count].power = power;
+    world.ir[world.ir_count].len = len;
+    world.ir[world.ir_count].lo = (uint32_t)payload_lo;
+    world.ir[world.ir_count].hi = (uint32_t)payload_hi;
+    world.ir_count++;
+}
+
+/* ---- host link ---- */
+
+void host_send_raw(const uint8_t *bytes, uint16_t n)
+{
+    for (uint16_t i = 0; i < n; i++)
+        sim_uart_rx(bytes[i]);
+}
+
+void host_send(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
+{
+    uint8_t frame[PB_MAX_FRAME + 8];
+    uint8_t slip[2 * sizeof frame + 2];
+    uint16_t n = pb_frame_encode(frame, type, seq, payload, len);
+    uint16_t m = slip_encode(slip, frame, n);
+    host_send_raw(slip, m);
+}
+
+static void take(int32_t max)
+{
+    while (max > 0) {
+        int32_t n = sim_uart_tx_take(max);
+        if (n <= 0)
+            break;
+        const uint8_t *b = sim_host_tx_buffer();
+        for (int32_t i = 0; i < n; i++) {
+            slip_result_t r = slip_decode(&host_rx, b[i]);
+            if (r == SLIP_ERROR)
+                host_bad_frames++;
+            if (r != SLIP_FRAME)
+                continue;
+            pb_frame_t f;
+            if (pb_frame_check(host_rx.buf, host_rx.len, &f) != PB_ERROR_CODE_NONE) {
+                host_bad_frames++;
+                continue;
+            }
+            if (host_frame_count < WORLD_MAX_FRAMES) {
+                host_frame_t *h = &host_frames[host_frame_count++];
+                h->type = f.type;
+                h->seq = f.seq;
+                h->len = f.len;
+                memcpy(h->payload, f.payload, f.len);
+            }
+        }
+        max -= n;
+    }
+}
+
+void host_collect(void)
+{
+    take(1 << 20);
+}
+
+void host_clear(void)
+{
+    host_frame_count = 0;
+    host_bad_frames = 0;
+}
+
+const host_frame_t *host_find(uint8_t type, int n)
+{
+    for (int i = 0; i < host_frame_count; i++)
+        if (host_frames[i].type == type && n-- == 0)
+            return &host_frames[i];
+    return NULL;
+}
+
+int host_count(uint8_t type)
+{
+    int c = 0;
+    for (int i = 0; i < host_frame_count; i++)
+        c += host_frames[i].type == type;
+    return c;
+}

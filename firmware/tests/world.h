@@ -1,0 +1,81 @@
+/**
+ * \file world.h
+ * A small physical world for host tests and the fuzzer: it implements the emulator's imports of
+ * sim_abi.h (line_adc, sensor_read, ir_send), simulates two motors with first-order dynamics and a dead
+ * band, single-channel encoders with unequal stripes, a robot pose, a line on the floor, and a host link.
+ */
+#ifndef WORLD_H
+#define WORLD_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal/sim/sim_abi.h"
+#include "pb_protocol.h"
+
+#define WORLD_MAX_IR 64
+#define WORLD_MAX_FRAMES 512
+
+typedef struct {
+    /* plant */
+    double v[2];          /* wheel speeds, m/s */
+    double pos[2];        /* wheel distances, m */
+    double next_edge[2];  /* position of the next stripe edge ahead */
+    double prev_edge[2];  /* and behind */
+    int edge_index[2];
+    double x, y, theta;   /* pose: metres, radians (theta 0 = +x, CCW positive) */
+    double max_speed;     /* wheel speed at full duty, m/s */
+    double tau;           /* motor time constant, s */
+    int deadband;         /* duties below this do not move the wheel */
+    double stripe_ratio;  /* long stripe / mean stripe */
+    /* floor */
+    int line_enabled;     /* a black line along y = line_y (x axis) */
+    double line_y, line_width;
+    int ambient;          /* ambient light reading */
+    int colour[4];        /* r, g, b, clear seen by the colour sensor */
+    int sensors[10];      /* battery etc. as sensor_read returns them */
+    /* IR messages the robot sent */
+    struct { int sender, led, power, len; uint32_t lo, hi; } ir[WORLD_MAX_IR];
+    int ir_count;
+    int emitter_masks_seen; /* bit m set when line_adc saw emitter mask m (m < 32) */
+    int64_t now;
+    int link_bytes_per_ms; /* how fast the host drains the link */
+} world_t;
+
+extern world_t world;
+
+/* Host builds of hal_sim.c: pointers instead of the int32 linear-memory addresses. */
+const sim_outputs_t *sim_host_outputs(void);
+const uint8_t *sim_host_tx_buffer(void);
+void sim_host_eeprom_erase(void);
+
+/** Resets the world (robot at the origin facing +x, standing still, EEPROM erased) and starts the firmware. */
+void world_reset(int32_t robot_id);
+/** Runs physics and firmware for `ms` milliseconds (0.1 ms physics steps, exact encoder edge times). */
+void world_run_ms(int ms);
+/** Heading change in degrees since reset. */
+double world_heading_deg(void);
+
+/* ---- host link ---- */
+typedef struct {
+    uint8_t type, seq, len;
+    uint8_t payload[PB_MAX_PAYLOAD];
+} host_frame_t;
+
+/** Sends a packet to the robot as the host would (framed, SLIP). */
+void host_send(uint8_t type, uint8_t seq, const void *payload, uint8_t len);
+/** Sends raw bytes on the link. */
+void host_send_raw(const uint8_t *bytes, uint16_t n);
+/** Collects every frame the robot sent so far (appends to host_frames). */
+void host_collect(void);
+extern host_frame_t host_frames[WORLD_MAX_FRAMES];
+extern int host_frame_count;
+extern int host_bad_frames;
+/** Forgets collected frames. */
+void host_clear(void);
+/** \return the n-th (0-based) collected frame of `type`, or NULL. */
+const host_frame_t *host_find(uint8_t type, int n);
+/** \return how many collected frames have `type`. */
+int host_count(uint8_t type);
+
+#endif
