@@ -728,7 +728,7 @@ def gen_javolution(model, vectors):
         o.append(f"        val bytes = hex(\"{v['payload']}\")")
         o.append(f"        val s = {cls}()")
         o.append(f"        assertEquals(bytes.size, s.size(), \"{p.name} size\")")
-        o.append("        s.setByteBuffer(ByteBuffer.wrap(bytes), 0)")
+        o.append("        s.setByteBuffer(ByteBuffer.wrap(bytes).order(ByteOrder.LITTLE_ENDIAN), 0)")
         for path, f, val in leaves:
             if f.is_char:
                 exp = json.dumps(val, ensure_ascii=False).replace("$", "\\$")
