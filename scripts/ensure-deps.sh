@@ -9,7 +9,7 @@ PACKAGES=(
   gcc-avr avr-libc binutils-avr simavr
   clang lld libclang-rt-14-dev libclang-rt-14-dev-wasm32
   # host tools: serial/pty plumbing, protocol generator, BlueZ D-Bus mock for the SDK tests
-  socat python3 python3-dbusmock make
+  socat python3 python3-dbusmock dbus make
   # JVM build and the Kotlin/JS test run of sdk/core
   openjdk-17-jdk-headless maven nodejs
 )
