@@ -6,6 +6,7 @@
 
 static volatile encoder_snapshot_t enc[2];
 static volatile uint8_t have_last[2];
+static volatile uint8_t changes[2];
 
 void encoder_init(void)
 {
@@ -13,6 +14,7 @@ void encoder_init(void)
         memset((void *)&enc[w], 0, sizeof enc[w]);
         enc[w].dir = 1;
         have_last[w] = 0;
+        changes[w]++;
     }
 }
 
@@ -31,6 +33,7 @@ void encoder_capture_isr(uint8_t wheel, uint32_t timestamp)
     have_last[wheel] = 1;
     e->last = timestamp;
     e->edges++;
+    changes[wheel]++;
 }
 
 void encoder_set_direction(uint8_t wheel, int8_t dir)
@@ -41,8 +44,14 @@ void encoder_set_direction(uint8_t wheel, int8_t dir)
     if (enc[wheel].dir != dir) {
         enc[wheel].dir = dir;
         enc[wheel].periods = 0; /* a reversal: periods across it are no speed */
+        changes[wheel]++;
     }
     hal_irq_restore(s);
+}
+
+uint8_t encoder_changes(uint8_t wheel)
+{
+    return changes[wheel & 1u];
 }
 
 void encoder_snapshot(uint8_t wheel, encoder_snapshot_t *out)

@@ -28,5 +28,8 @@ void encoder_init(void);
 void encoder_set_direction(uint8_t wheel, int8_t dir);
 /** Copies the state of `wheel` with interrupts masked. */
 void encoder_snapshot(uint8_t wheel, encoder_snapshot_t *out);
+/** \return a counter that moves whenever the snapshot of `wheel` changes (an edge, a reversal): a reader
+ *  that saw it unchanged can skip the snapshot. */
+uint8_t encoder_changes(uint8_t wheel);
 
 #endif

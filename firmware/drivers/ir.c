@@ -24,17 +24,20 @@ void ir_rx_isr(uint8_t side, const hal_ir_msg_t *msg)
     rx_count++;
 }
 
-bool ir_receive(uint8_t *side, hal_ir_msg_t *msg)
+const hal_ir_msg_t *ir_peek(uint8_t *side)
 {
     if (rx_count == 0)
-        return false;
-    memcpy(msg, &rx_msg[rx_tail], sizeof *msg);
+        return NULL;
     *side = rx_side[rx_tail];
+    return &rx_msg[rx_tail]; /* the interrupt writes only the free slots */
+}
+
+void ir_pop(void)
+{
     rx_tail = (uint8_t)((rx_tail + 1u) % IR_RX_QUEUE);
     uint8_t s = hal_irq_save();
     rx_count--;
     hal_irq_restore(s);
-    return true;
 }
 
 bool ir_transmit(const hal_ir_msg_t *msg)

@@ -14,8 +14,10 @@
 #define IR_RX_QUEUE 8u
 
 void ir_init(void);
-/** Takes the oldest heard message. \return false when none waits. */
-bool ir_receive(uint8_t *side, hal_ir_msg_t *msg);
+/** The oldest heard message, left in the queue (no copy). \return NULL when none waits. */
+const hal_ir_msg_t *ir_peek(uint8_t *side);
+/** Drops the message ir_peek() returned. */
+void ir_pop(void);
 /** Sends a message. \return false if the transmitter is busy. */
 bool ir_transmit(const hal_ir_msg_t *msg);
 

@@ -1,16 +1,17 @@
 #include "line_sensor.h"
 
 #include <stddef.h>
+#include <string.h>
 
 #include "hal/hal.h"
+#include "modules/fixed.h"
 #include "modules/reflector.h"
 #include "modules/scheduler.h"
 #include "modules/settings.h"
 
 /* Spot lit by each detector in the two lit phases: detector d sits between emitters d and d+1, spot 2d is
- * lit by emitter d and spot 2d+1 by emitter d+1. */
-static const HAL_FLASH uint8_t spot_a[HAL_LINE_DETECTORS] = {0, 3, 4, 7}; /* emitters 0, 2, 4 */
-static const HAL_FLASH uint8_t spot_b[HAL_LINE_DETECTORS] = {1, 2, 5, 6}; /* emitters 1, 3 */
+ * lit by emitter d and spot 2d+1 by emitter d+1. Phase A (emitters 0, 2, 4) lights spots 0, 3, 4, 7 of
+ * detectors 0..3, phase B (emitters 1, 3) spots 1, 2, 5, 6 (see line_sensor_task()). */
 #define EMITTERS_A 0x15u
 #define EMITTERS_B 0x0Au
 
@@ -22,12 +23,15 @@ static volatile uint8_t phase;  /* 0 idle */
 static volatile uint8_t ready;
 static uint32_t last_seen_ms;
 
-/* Calibration scale per spot, (1000 << 16) / (cal_max - cal_min), cached against settings changes. */
+/* Calibration scale per spot, (1000 << 16) / (cal_max - cal_min), and the smallest raw - cal_min whose
+ * darkness exceeds the threshold, cached against settings changes. */
 static uint32_t scale[LINE_SPOTS];
+static uint16_t above[LINE_SPOTS];
 static uint8_t scale_gen;
 static uint8_t scale_dirty; /* spots whose scale waits for an update, one per call */
 
 static uint32_t spot_scale(uint8_t i);
+static uint16_t spot_above(uint8_t i);
 
 static void step(void)
 {
@@ -75,8 +79,10 @@ void line_sensor_init(void)
     last_seen_ms = 0;
     scale_gen = settings_generation;
     scale_dirty = 0;
-    for (uint8_t i = 0; i < LINE_SPOTS; i++)
+    for (uint8_t i = 0; i < LINE_SPOTS; i++) {
         scale[i] = spot_scale(i);
+        above[i] = spot_above(i);
+    }
     hal_line_emitters(0);
     robot_state.line.position = 0;
     robot_state.line.flags = 0;
@@ -90,6 +96,16 @@ static uint32_t spot_scale(uint8_t i)
     return hi > lo ? (1000ul << 16) / (uint16_t)(hi - lo) : 0;
 }
 
+/* ((raw - lo) * scale) >> 16 > threshold  <=>  raw - lo >= ceil(((threshold + 1) << 16) / scale) */
+static uint16_t spot_above(uint8_t i)
+{
+    uint32_t t = (uint32_t)settings.line_sensor.threshold + 1u;
+    if (scale[i] == 0 || t > 1000u)
+        return 0xFFFFu; /* uncalibrated, or a threshold no darkness exceeds: decided by raw >= hi */
+    uint32_t x = ((t << 16) + scale[i] - 1u) / scale[i];
+    return x > 0xFFFFu ? 0xFFFFu : (uint16_t)x;
+}
+
 static void update_scale(void)
 {
     if (scale_gen != settings_generation) {
@@ -101,36 +117,67 @@ static void update_scale(void)
         while (!(scale_dirty & (1u << i)))
             i++;
         scale[i] = spot_scale(i);
+        above[i] = spot_above(i);
         scale_dirty &= (uint8_t)~(1u << i);
     }
+}
+
+/* n / d for 0 <= n <= 1000 d (a weighted mean of |spot_x|): ten quotient bits by shift and subtract, not a
+ * 32-bit division. */
+#ifdef __AVR__
+typedef __uint24 sum_t; /* 1000 x 8 x 1000 < 2^24: three-byte arithmetic on the AVR */
+#else
+typedef uint32_t sum_t;
+#endif
+
+static uint16_t mean_of(sum_t n, sum_t d)
+{
+    uint16_t q = 0;
+    d <<= 9;
+    for (uint16_t bit = 1u << 9; bit; bit >>= 1, d >>= 1) {
+        if (n >= d) {
+            n -= d;
+            q |= bit;
+        }
+    }
+    return q;
 }
 
 uint8_t line_sensor_evaluate(const uint16_t raw[LINE_SPOTS], uint16_t dark_out[LINE_SPOTS], int16_t *position)
 {
     update_scale();
     uint16_t threshold = settings.line_sensor.threshold;
-    int32_t sum_wx = 0;
-    uint32_t sum_w = 0;
+    sum_t sum_right = 0, sum_left = 0; /* weights times |x| on each side of the centre, < 2^23 */
+    uint16_t sum_w = 0;                   /* at most 8 x 1000 */
     for (uint8_t i = 0; i < LINE_SPOTS; i++) {
         uint16_t lo = settings.line_sensor.cal_min[i], hi = settings.line_sensor.cal_max[i];
         uint16_t d;
-        if (raw[i] <= lo)
+        if (raw[i] <= lo) {
             d = 0;
-        else if (raw[i] >= hi) /* also an uncalibrated spot (hi <= lo): dark above cal_min */
+        } else if (raw[i] >= hi) { /* also an uncalibrated spot (hi <= lo): dark above cal_min */
             d = 1000;
-        else /* (raw - lo) < (hi - lo), so the product stays below 1000 << 16 */
-            d = (uint16_t)(((uint32_t)(raw[i] - lo) * scale[i]) >> 16);
+        } else if (!dark_out && raw[i] - lo < above[i]) { /* not above the threshold: only the task asks */
+            continue;
+        } else { /* (raw - lo) < (hi - lo), so the product stays below 1000 << 16 */
+            uint16_t x = (uint16_t)(raw[i] - lo);
+            d = (uint16_t)(fx_umul16(x, (uint16_t)(scale[i] >> 16)) + (fx_umul16(x, (uint16_t)scale[i]) >> 16));
+        }
         if (dark_out)
             dark_out[i] = d;
         if (d > threshold) {
             uint16_t w = (uint16_t)(d - threshold);
-            sum_w += w;
-            sum_wx += (int32_t)w * spot_x[i];
+            int16_t x = spot_x[i];
+            sum_w = (uint16_t)(sum_w + w);
+            if (x < 0)
+                sum_left += fx_umul16(w, (uint16_t)-x);
+            else
+                sum_right += fx_umul16(w, (uint16_t)x);
         }
     }
     if (sum_w == 0)
         return 0;
-    *position = (int16_t)(sum_wx / (int32_t)sum_w);
+    *position = sum_right >= sum_left ? (int16_t)mean_of(sum_right - sum_left, sum_w)
+                                      : -(int16_t)mean_of(sum_left - sum_right, sum_w);
     return 1;
 }
 
@@ -139,12 +186,17 @@ void line_sensor_task(void)
     if (ready) {
         ready = 0;
         uint16_t spot_raw[LINE_SPOTS];
-        for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++) {
-            spot_raw[spot_a[d]] = lit_a[d] > dark[d] ? (uint16_t)(lit_a[d] - dark[d]) : 0;
-            spot_raw[spot_b[d]] = lit_b[d] > dark[d] ? (uint16_t)(lit_b[d] - dark[d]) : 0;
-        }
-        for (uint8_t i = 0; i < LINE_SPOTS; i++)
-            robot_state.line.raw[i] = spot_raw[i];
+#define LIT_MINUS_DARK(lit, d) (lit[d] > dark[d] ? (uint16_t)(lit[d] - dark[d]) : 0u)
+        spot_raw[0] = LIT_MINUS_DARK(lit_a, 0);
+        spot_raw[1] = LIT_MINUS_DARK(lit_b, 0);
+        spot_raw[2] = LIT_MINUS_DARK(lit_b, 1);
+        spot_raw[3] = LIT_MINUS_DARK(lit_a, 1);
+        spot_raw[4] = LIT_MINUS_DARK(lit_a, 2);
+        spot_raw[5] = LIT_MINUS_DARK(lit_b, 2);
+        spot_raw[6] = LIT_MINUS_DARK(lit_b, 3);
+        spot_raw[7] = LIT_MINUS_DARK(lit_a, 3);
+#undef LIT_MINUS_DARK
+        memcpy(robot_state.line.raw, spot_raw, sizeof spot_raw);
         int16_t pos;
         uint8_t flags = robot_state.line.flags;
         if (line_sensor_evaluate(spot_raw, NULL, &pos)) {

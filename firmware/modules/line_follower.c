@@ -9,15 +9,43 @@
 
 /** Largest wheel speed difference the line PD may ask for, m/s. */
 #define LINE_MAX_TURN 1.0f
+/** The PD's output: wheel speed difference in mm/s, Q16. */
+#define MM_PER_M 1000.0f
+#define UM_PER_M 1.0e6f
 
 static uint8_t running;
 static uint8_t colour_mode;
-static float speed_cmd;
+static int32_t speed_cmd; /* um/s */
 static pid_state_t pid;
+
+/* Converted from the float settings when they change. */
+static struct {
+    uint8_t gen;
+    pid_gains_t pid;
+    int32_t black, red, blue; /* cruise speeds, um/s */
+} k;
+
+static int32_t to_umps(float v)
+{
+    return (int32_t)(v * UM_PER_M + 0.5f); /* settings keep speeds in 0..1 m/s */
+}
+
+static void refresh_params(void)
+{
+    if (k.gen == settings_generation)
+        return;
+    k.gen = settings_generation;
+    pid_gains_convert(&k.pid, &settings.line_pid, 1.0f, MM_PER_M);
+    k.black = to_umps(settings.line_follow.speed_mps);
+    k.red = to_umps(settings.line_follow.red_speed_mps);
+    k.blue = to_umps(settings.line_follow.blue_speed_mps);
+}
 
 void line_follower_init(void)
 {
     running = 0;
+    k.gen = (uint8_t)(settings_generation - 1u);
+    refresh_params();
     robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_OFF;
     robot_state.line_follow.segment = PB_COLOUR_UNKNOWN;
 }
@@ -35,7 +63,7 @@ uint8_t line_follower_command(uint8_t run, uint8_t mode, float speed_mps)
     }
     running = 1;
     colour_mode = mode;
-    speed_cmd = speed_mps;
+    speed_cmd = to_umps(speed_mps);
     pid_reset(&pid);
     locomotion_line_follow_begin();
     robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_FOLLOWING;
@@ -49,16 +77,16 @@ void line_follower_stop(void)
     robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_OFF;
 }
 
-static float cruise_speed(void)
+static int32_t cruise_speed(void)
 {
     uint8_t seg = robot_state.line_follow.segment;
     if (colour_mode == PB_COLOUR_MODE_SEGMENTS) {
         if (seg == PB_COLOUR_RED)
-            return settings.line_follow.red_speed_mps;
+            return k.red;
         if (seg == PB_COLOUR_BLUE)
-            return settings.line_follow.blue_speed_mps;
+            return k.blue;
     }
-    return speed_cmd > 0.0f ? speed_cmd : settings.line_follow.speed_mps;
+    return speed_cmd > 0 ? speed_cmd : k.black;
 }
 
 void line_follower_task(void)
@@ -70,6 +98,7 @@ void line_follower_task(void)
 
     if (!running)
         return;
+    refresh_params();
     if (robot_state.locomotion.mode != PB_LOCO_MODE_LINE_FOLLOW) { /* another command took the motors */
         line_follower_stop();
         return;
@@ -79,12 +108,14 @@ void line_follower_task(void)
             DEBUG_PRINT(LINE, 1, "line lost");
         robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_LOST;
         pid_reset(&pid);
-        locomotion_line_follow_set(0.0f, 0.0f);
+        locomotion_line_follow_set(0, 0);
         return;
     }
     robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_FOLLOWING;
     /* Positive position: the line is to the right, so the left wheel runs faster. */
-    float u = pid_update(&pid, &settings.line_pid, (float)robot_state.line.position, LINE_MAX_TURN);
-    float v = cruise_speed();
-    locomotion_line_follow_set(v + 0.5f * u, v - 0.5f * u);
+    int32_t u = pid_update(&pid, &k.pid, robot_state.line.position, (int32_t)(LINE_MAX_TURN * MM_PER_M) << PID_Q);
+    /* Half the difference in um/s: u * 1000 / 2^16 / 2 = (u / 2^6) * 125 / 2^8 (|u / 2^6| <= 1024000). */
+    int32_t half = (u >> 6) * 125 >> 8;
+    int32_t v = cruise_speed();
+    locomotion_line_follow_set(v + half, v - half);
 }

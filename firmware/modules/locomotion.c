@@ -3,6 +3,7 @@
 #include "drivers/motors.h"
 #include "modules/comm.h"
 #include "modules/debug.h"
+#include "modules/fixed.h"
 #include "modules/pid.h"
 #include "modules/reflector.h"
 #include "modules/scheduler.h"
@@ -11,11 +12,22 @@
 
 #define DEG_TO_RAD 0.0174532925f
 #define MAX_DISTANCE 100.0f
+/** Longest wheel distance of one movement, m: well inside what the um arithmetic holds (FX_FRAC_MAX). */
+#define MAX_WHEEL_DISTANCE 1000.0f
+#define UM_PER_M 1.0e6f
+/** Movements shorter than this (faster wheel, um) are done at once. */
+#define MIN_MASTER_UM 10
+/** Braking works on squared speeds in units of 2^BRAKE_SHIFT um/s (squares of up to 4 m/s fit 32 bits). */
+#define BRAKE_SHIFT 6
 
+/* A queued movement, converted to fixed point when it is queued (the divisions happen there, once). */
 typedef struct {
     uint16_t id;
-    float dl, dr; /* wheel distances, m, signed */
-    float v;      /* cruise speed of the faster wheel, m/s */
+    int32_t dl, dr;   /* wheel distances, um, signed */
+    int32_t v;        /* cruise speed of the faster wheel, um/s */
+    int32_t master;   /* distance of the faster wheel, um */
+    int16_t bl, br;   /* left:right shares dl/master, dr/master, Q14 */
+    int16_t pl, pr;   /* projections: done along the faster wheel = sl * pl + sr * pr, Q14 */
 } movement_t;
 
 static movement_t queue[LOCOMOTION_QUEUE_SIZE];
@@ -24,33 +36,57 @@ static uint8_t q_head, q_count; /* the running movement stays at the head */
 static struct {
     uint8_t running;
     uint8_t braking;
-    float sl0, sr0;     /* wheel positions at the start */
-    float master;       /* distance of the faster wheel, m */
-    float bl, br;       /* left:right shares dl/master, dr/master */
-    float pl, pr;       /* projections: done along the faster wheel = sl * pl + sr * pr */
-    float vmin, vmin_sq;
-    float accel_dt, decel_dt, decel2;
-    float v_prof;       /* speed of the profile's rising side */
+    int32_t sl0, sr0;      /* wheel positions at the start, um */
+    int32_t vmin;          /* um/s */
+    uint32_t vmin_sq;      /* (vmin >> BRAKE_SHIFT)^2 */
+    int32_t accel_dt, decel_dt; /* profile slopes, um/s per tick */
+    int32_t v_prof;        /* speed of the profile's rising side, um/s */
 } act;
 
 /* Coasting: after the motors are cut at the end of a movement the robot rolls on for about its speed times
  * a time constant of the drive. That time is learnt from every movement after which the robot comes to
  * rest, and later movements cut the motors that much earlier. */
-#define COAST_MAX_S 0.3f
+#define COAST_MAX_Q14 4915 /* 0.3 s in Q14 seconds */
+#define COAST_MIN_V_UMPS 5000
 static struct {
     uint8_t watching;
-    float sl0, sr0, pl, pr; /* the finished movement's frame */
-    float s_cut, v_cut;     /* distance done and speed when the motors were cut */
+    int32_t sl0, sr0;      /* the finished movement's frame */
+    int16_t pl, pr;
+    int32_t s_cut, v_cut;  /* distance done (um) and speed (um/s) when the motors were cut */
 } coast;
-static float coast_s; /* learnt coasting time, s (0 until the first observation) */
+static int16_t coast_q14; /* learnt coasting time, Q14 seconds (0 until the first observation) */
 static uint8_t coast_seen;
 
 /* Where the last movement should have ended, when the next one follows straight on. */
 static uint8_t chain;
-static float end_l, end_r;
+static int32_t end_l, end_r;
 
 static pid_state_t speed_pid, balance_pid, wheel_pid[2];
-static float target[2];
+static int32_t target[2]; /* um/s */
+
+/* Controller parameters converted from the float settings when they change. */
+static struct {
+    uint8_t gen;
+    pid_gains_t speed, wheel, balance;
+    fx_gain_t accel, decel; /* m/s^2 = um/s per us */
+    fx_gain_t brake;        /* 2 * decel in (2^BRAKE_SHIFT um/s)^2 per um */
+    int32_t vmin;           /* profile.min_speed_mps, um/s */
+} k;
+
+static void refresh_params(void)
+{
+    if (k.gen == settings_generation)
+        return;
+    k.gen = settings_generation;
+    pid_gains_convert(&k.speed, &settings.speed_pid, UM_PER_M, 1.0f);
+    pid_gains_convert(&k.wheel, &settings.wheel_pid, UM_PER_M, 1.0f);
+    pid_gains_convert(&k.balance, &settings.wheel_balance, UM_PER_M, 1.0f);
+    const pb_settings_profile_t *p = &settings.profile;
+    k.accel = fx_gain(p->accel_mps2);
+    k.decel = fx_gain(p->decel_mps2);
+    k.brake = fx_gain(2.0f * p->decel_mps2 * UM_PER_M / (float)(1ul << (2 * BRAKE_SHIFT)));
+    k.vmin = (int32_t)(p->min_speed_mps * UM_PER_M + 0.5f);
+}
 
 static uint8_t mode(void)
 {
@@ -66,29 +102,21 @@ static void set_mode(uint8_t m)
     robot_state.locomotion.mode = m;
 }
 
-static float pwm_limit(void)
+/* Output clamp of the motor controllers, Q16 permille. */
+static int32_t pwm_limit_q16(void)
 {
-    static uint16_t cached_raw = 0xFFFFu;
-    static float cached;
-    if (settings.motors.pwm_limit != cached_raw) {
-        cached_raw = settings.motors.pwm_limit;
-        cached = cached_raw > 1000u ? 1000.0f : (float)cached_raw;
-    }
-    return cached;
-}
-
-static int16_t round_duty(float v)
-{
-    return (int16_t)(v >= 0.0f ? v + 0.5f : v - 0.5f);
+    uint16_t lim = settings.motors.pwm_limit > 1000u ? 1000u : settings.motors.pwm_limit;
+    return (int32_t)lim << PID_Q;
 }
 
 /* The encoders have one channel and count in the direction the motor is driven: a wheel is never driven
- * against the way it should turn (that would miscount the pulses while it still rolls forward). */
-static int16_t duty_towards(float duty, float direction)
+ * against the way it should turn (that would miscount the pulses while it still rolls forward).
+ * \param duty Q16 permille */
+static int16_t duty_towards(int32_t duty, int32_t direction)
 {
-    if ((direction > 0.0f && duty < 0.0f) || (direction < 0.0f && duty > 0.0f) || direction == 0.0f)
+    if ((direction > 0 && duty < 0) || (direction < 0 && duty > 0) || direction == 0)
         return 0;
-    return round_duty(duty);
+    return (int16_t)fx_round_q16(fx_clamp(duty, 1000L << PID_Q));
 }
 
 static bool is_finite(float v)
@@ -96,15 +124,27 @@ static bool is_finite(float v)
     return v == v && v - v == 0.0f;
 }
 
+static int32_t round_to_int(float v)
+{
+    return (int32_t)(v >= 0.0f ? v + 0.5f : v - 0.5f);
+}
+
+static int16_t to_q14(float v)
+{
+    return (int16_t)round_to_int(v * (float)FX_ONE);
+}
+
 void locomotion_init(void)
 {
     q_head = q_count = 0;
     act.running = 0;
     coast.watching = 0;
-    coast_s = 0.0f;
+    coast_q14 = 0;
     coast_seen = 0;
     chain = 0;
-    target[0] = target[1] = 0.0f;
+    target[0] = target[1] = 0;
+    k.gen = (uint8_t)(settings_generation - 1u);
+    refresh_params();
     robot_state.locomotion.mode = PB_LOCO_MODE_IDLE;
     robot_state.locomotion.queue_length = 0;
     robot_state.locomotion.current_id = 0;
@@ -117,9 +157,24 @@ static uint8_t enqueue(uint16_t id, float dl, float dr, float v)
         return PB_ERROR_CODE_QUEUE_FULL;
     movement_t *m = &queue[(uint8_t)(q_head + q_count) % LOCOMOTION_QUEUE_SIZE];
     m->id = id;
-    m->dl = dl;
-    m->dr = dr;
-    m->v = v;
+    m->dl = round_to_int(dl * UM_PER_M);
+    m->dr = round_to_int(dr * UM_PER_M);
+    m->v = round_to_int(v * UM_PER_M);
+    float al = dl < 0.0f ? -dl : dl;
+    float ar = dr < 0.0f ? -dr : dr;
+    float master = al > ar ? al : ar;
+    float inv_master = master > 0.0f ? 1.0f / master : 0.0f;
+    float bl = dl * inv_master, br = dr * inv_master;
+    /* (sl*dl + sr*dr) / (dl^2 + dr^2) is the fraction done; times master, the distance done. */
+    float b2 = bl * bl + br * br;
+    float inv_b2 = b2 > 0.0f ? 1.0f / b2 : 0.0f;
+    m->master = m->dl < 0 ? -m->dl : m->dl;
+    if (m->dr > m->master || -m->dr > m->master)
+        m->master = m->dr < 0 ? -m->dr : m->dr;
+    m->bl = to_q14(bl);
+    m->br = to_q14(br);
+    m->pl = to_q14(bl * inv_b2);
+    m->pr = to_q14(br * inv_b2);
     q_count++;
     if (mode() != PB_LOCO_MODE_MOVEMENT) {
         set_mode(PB_LOCO_MODE_MOVEMENT);
@@ -160,6 +215,8 @@ uint8_t locomotion_arc(uint16_t id, float radius_m, float angle_deg, float speed
     float half = 0.5f * settings.geometry.wheel_base_m;
     float dl = ath * radius_m - th * half;
     float dr = ath * radius_m + th * half;
+    if (dl > MAX_WHEEL_DISTANCE || dl < -MAX_WHEEL_DISTANCE || dr > MAX_WHEEL_DISTANCE || dr < -MAX_WHEEL_DISTANCE)
+        return PB_ERROR_CODE_BAD_ARGUMENT;
     /* The outer wheel is the faster one: scale the centre speed up to it. */
     float v = speed_mps * (radius_m + half) / radius_m;
     if (v > LOCOMOTION_MAX_SPEED)
@@ -196,7 +253,7 @@ uint8_t locomotion_teleop(float left_mps, float right_mps)
         return PB_ERROR_CODE_BAD_ARGUMENT;
     clear_queue();
     set_mode(PB_LOCO_MODE_TELEOP);
-    locomotion_line_follow_set(left_mps, right_mps);
+    locomotion_line_follow_set(round_to_int(left_mps * UM_PER_M), round_to_int(right_mps * UM_PER_M));
     return PB_ERROR_CODE_NONE;
 }
 
@@ -204,18 +261,18 @@ void locomotion_line_follow_begin(void)
 {
     clear_queue();
     set_mode(PB_LOCO_MODE_LINE_FOLLOW);
-    target[0] = target[1] = 0.0f;
+    target[0] = target[1] = 0;
 }
 
-void locomotion_line_follow_set(float left_mps, float right_mps)
+void locomotion_line_follow_set(int32_t left_umps, int32_t right_umps)
 {
     /* A wheel that reverses starts its PID afresh: the old integral pushes the wrong way. */
-    if ((left_mps < 0.0f) != (target[0] < 0.0f))
+    if ((left_umps < 0) != (target[0] < 0))
         pid_reset(&wheel_pid[0]);
-    if ((right_mps < 0.0f) != (target[1] < 0.0f))
+    if ((right_umps < 0) != (target[1] < 0))
         pid_reset(&wheel_pid[1]);
-    target[0] = left_mps;
-    target[1] = right_mps;
+    target[0] = left_umps;
+    target[1] = right_umps;
 }
 
 void locomotion_failsafe(void)
@@ -228,15 +285,14 @@ void locomotion_failsafe(void)
 /* Per-wheel speed PIDs towards target[] (teleoperation and line following). */
 static void wheel_step(void)
 {
-    float lim = pwm_limit();
+    int32_t lim = pwm_limit_q16();
     int16_t duty[2];
     for (uint8_t w = 0; w < 2; w++) {
-        if (target[w] == 0.0f) { /* hold still without creeping on a leftover integral */
+        if (target[w] == 0) { /* hold still without creeping on a leftover integral */
             pid_reset(&wheel_pid[w]);
             duty[w] = 0;
         } else {
-            duty[w] = duty_towards(pid_update(&wheel_pid[w], &settings.wheel_pid, target[w] - speed_mps(w), lim),
-                                   target[w]);
+            duty[w] = duty_towards(pid_update(&wheel_pid[w], &k.wheel, target[w] - speed_umps(w), lim), target[w]);
         }
     }
     motors_set(duty[0], duty[1]);
@@ -245,28 +301,16 @@ static void wheel_step(void)
 static void start_next(void)
 {
     const movement_t *m = &queue[q_head];
-    const pb_settings_profile_t *p = &settings.profile;
     act.running = 1;
     act.braking = 0;
-    act.sl0 = chain ? end_l : speed_distance_m(0);
-    act.sr0 = chain ? end_r : speed_distance_m(1);
-    float al = m->dl < 0.0f ? -m->dl : m->dl;
-    float ar = m->dr < 0.0f ? -m->dr : m->dr;
-    act.master = al > ar ? al : ar;
-    float inv_master = act.master > 0.0f ? 1.0f / act.master : 0.0f;
-    act.bl = m->dl * inv_master;
-    act.br = m->dr * inv_master;
-    /* (sl*dl + sr*dr) / (dl^2 + dr^2) is the fraction done; times master, the distance done. */
-    float b2 = act.bl * act.bl + act.br * act.br;
-    float inv_b2 = b2 > 0.0f ? 1.0f / b2 : 0.0f;
-    act.pl = act.bl * inv_b2;
-    act.pr = act.br * inv_b2;
-    act.vmin = p->min_speed_mps < m->v ? p->min_speed_mps : m->v;
-    act.vmin_sq = act.vmin * act.vmin;
-    float dt = (float)scheduler_period_us() * 1.0e-6f;
-    act.accel_dt = p->accel_mps2 * dt;
-    act.decel_dt = p->decel_mps2 * dt;
-    act.decel2 = 2.0f * p->decel_mps2;
+    act.sl0 = chain ? end_l : speed_position_um(0);
+    act.sr0 = chain ? end_r : speed_position_um(1);
+    act.vmin = k.vmin < m->v ? k.vmin : m->v;
+    uint32_t vq = (uint32_t)act.vmin >> BRAKE_SHIFT;
+    act.vmin_sq = vq * vq;
+    int32_t period_us = scheduler_period_us();
+    act.accel_dt = fx_mul(period_us, &k.accel);
+    act.decel_dt = fx_mul(period_us, &k.decel);
     act.v_prof = act.vmin;
     pid_reset(&speed_pid);
     pid_reset(&balance_pid);
@@ -274,14 +318,14 @@ static void start_next(void)
     DEBUG_PRINT(LOCOMOTION, 3, "start %u", m->id);
 }
 
-static void finish(bool completed, float s_done, float v_now)
+static void finish(bool completed, int32_t s_done, int32_t v_now)
 {
     const movement_t *m = &queue[q_head];
-    coast.watching = completed && q_count == 1 && v_now > 0.005f;
+    coast.watching = completed && q_count == 1 && v_now > COAST_MIN_V_UMPS;
     coast.sl0 = act.sl0;
     coast.sr0 = act.sr0;
-    coast.pl = act.pl;
-    coast.pr = act.pr;
+    coast.pl = m->pl;
+    coast.pr = m->pr;
     coast.s_cut = s_done;
     coast.v_cut = v_now;
     if (completed) {
@@ -304,7 +348,7 @@ static void finish(bool completed, float s_done, float v_now)
         set_mode(PB_LOCO_MODE_IDLE);
 }
 
-/* One step of the two chained controllers, in as few float operations as the AVR can afford. */
+/* One step of the two chained controllers, in integers. */
 static void movement_step(void)
 {
     if (!act.running) {
@@ -316,14 +360,16 @@ static void movement_step(void)
         start_next();
     }
     const movement_t *m = &queue[q_head];
-    float sl = speed_distance_m(0) - act.sl0;
-    float sr = speed_distance_m(1) - act.sr0;
+    int32_t sl, sr;
+    speed_positions_um(&sl, &sr);
+    sl -= act.sl0;
+    sr -= act.sr0;
     /* Progress: the projection of what the wheels did on what they must do. */
-    float done = sl * act.pl + sr * act.pr;
-    float remaining = act.master - done;
+    int32_t done = fx_frac(sl, m->pl) + fx_frac(sr, m->pr);
+    int32_t remaining = m->master - done;
     /* Speed of the faster wheel, measured along the movement. */
-    float v_meas = speed_mps(0) * act.pl + speed_mps(1) * act.pr;
-    if (act.master < 1.0e-5f || remaining <= (v_meas > 0.0f ? v_meas * coast_s : 0.0f)) {
+    int32_t v_meas = fx_frac(speed_umps(0), m->pl) + fx_frac(speed_umps(1), m->pr);
+    if (m->master < MIN_MASTER_UM || remaining <= (v_meas > 0 ? fx_frac(v_meas, coast_q14) : 0)) {
         finish(true, done, v_meas);
         return;
     }
@@ -338,17 +384,37 @@ static void movement_step(void)
         if (act.v_prof > m->v)
             act.v_prof = m->v;
     }
-    /* Brake so as to reach vmin at the end: v^2 = vmin^2 + 2 a d (the square root only while braking). */
-    float v_set = act.v_prof;
-    float brake_sq = act.vmin_sq + act.decel2 * remaining;
-    if (v_set * v_set > brake_sq)
-        v_set = __builtin_sqrtf(brake_sq);
+    /* Brake so as to reach vmin at the end: v^2 = vmin^2 + 2 a d (the square root only while braking).
+     * remaining > 0 here; squares in (2^BRAKE_SHIFT um/s)^2, saturating. */
+    int32_t v_set = act.v_prof;
+    uint32_t decel_sq = (uint32_t)fx_mul(remaining, &k.brake);
+    uint32_t brake_sq = decel_sq > 0xFFFFFFFFul - act.vmin_sq ? 0xFFFFFFFFul : act.vmin_sq + decel_sq;
+    uint32_t vq = (uint32_t)v_set >> BRAKE_SHIFT;
+    if (vq * vq > brake_sq)
+        v_set = (int32_t)fx_isqrt(brake_sq) << BRAKE_SHIFT;
 
-    float lim = pwm_limit();
-    float base = pid_update(&speed_pid, &settings.speed_pid, v_set - v_meas, lim);
+    int32_t lim = pwm_limit_q16();
+    int32_t base = pid_update(&speed_pid, &k.speed, v_set - v_meas, lim);
     /* Balance: zero when each wheel has done the same share of its distance. */
-    float c = pid_update(&balance_pid, &settings.wheel_balance, sl * act.br - sr * act.bl, lim);
-    motors_set(duty_towards(base * act.bl - c * act.br, m->dl), duty_towards(base * act.br + c * act.bl, m->dr));
+    int32_t c = pid_update(&balance_pid, &k.balance, fx_frac(sl, m->br) - fx_frac(sr, m->bl), lim);
+    motors_set(duty_towards(fx_frac(base, m->bl) - fx_frac(c, m->br), m->dl),
+               duty_towards(fx_frac(base, m->br) + fx_frac(c, m->bl), m->dr));
+}
+
+/* Time to coast `d` um from `v` um/s, Q14 seconds, at most COAST_MAX_Q14. */
+static int16_t coast_time(int32_t d, int32_t v)
+{
+    if (d <= 0)
+        return 0;
+    if (d >= v / 10 * 3 + 1) /* d / v >= 0.3 s (v / 10 * 3 <= 0.3 v: rounding keeps the cap) */
+        return COAST_MAX_Q14;
+    uint32_t ud = (uint32_t)d, uv = (uint32_t)v;
+    while (ud >= (1ul << 17)) { /* keep ud << 14 within 32 bits */
+        ud >>= 1;
+        uv >>= 1;
+    }
+    uint32_t t = (ud << 14) / uv; /* uv > ud / 0.3 >= 1 */
+    return (int16_t)(t > COAST_MAX_Q14 ? COAST_MAX_Q14 : t);
 }
 
 /* Once the robot rests after a movement, how far it rolled after the cut tells the coasting time. */
@@ -358,25 +424,26 @@ static void coast_watch(void)
         coast.watching = 0;
         return;
     }
-    if (speed_mps(0) != 0.0f || speed_mps(1) != 0.0f)
+    if (speed_umps(0) != 0 || speed_umps(1) != 0)
         return;
     coast.watching = 0;
-    float done = (speed_distance_m(0) - coast.sl0) * coast.pl + (speed_distance_m(1) - coast.sr0) * coast.pr;
-    float t = pid_clamp((done - coast.s_cut) / coast.v_cut, COAST_MAX_S);
-    if (t < 0.0f)
-        t = 0.0f;
-    coast_s = coast_seen ? coast_s + 0.3f * (t - coast_s) : t;
+    int32_t done = fx_frac(speed_position_um(0) - coast.sl0, coast.pl) +
+                   fx_frac(speed_position_um(1) - coast.sr0, coast.pr);
+    int16_t t = coast_time(done - coast.s_cut, coast.v_cut);
+    /* Learn at 0.3 (19661 / 2^16) of the way towards each new observation. */
+    coast_q14 = coast_seen ? (int16_t)(coast_q14 + (((int32_t)t - coast_q14) * 19661L >> 16)) : t;
     coast_seen = 1;
-    DEBUG_PRINT(LOCOMOTION, 3, "coasting %u ms", (unsigned)(coast_s * 1000.0f));
+    DEBUG_PRINT(LOCOMOTION, 3, "coasting %u ms", (unsigned)(((uint32_t)coast_q14 * 1000u) >> 14));
 }
 
 float locomotion_coast_s(void)
 {
-    return coast_s;
+    return (float)coast_q14 / (float)FX_ONE;
 }
 
 void locomotion_task(void)
 {
+    refresh_params();
     if (coast.watching)
         coast_watch();
     switch (mode()) {

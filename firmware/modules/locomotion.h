@@ -4,6 +4,8 @@
  * chained controllers - a robot speed PID producing PWM and a wheel balance controller keeping the
  * left:right distance ratio - along a three-segment speed profile (accelerate, cruise, brake). Also
  * teleoperation and line following set points through per-wheel speed PIDs. Commands return at once.
+ * Commands take floats (as on the wire) and are converted once when queued; the control step is fixed
+ * point (um, um/s, Q14 shares, PWM in Q16 permille).
  */
 #ifndef LOCOMOTION_H
 #define LOCOMOTION_H
@@ -20,7 +22,8 @@ void locomotion_init(void);
 void locomotion_task(void);
 
 /** Queue movements. \return PB_ERROR_CODE_NONE, _QUEUE_FULL or _BAD_ARGUMENT (id 0, speed not in
- *  (0, LOCOMOTION_MAX_SPEED], non-finite or absurd distance, angle or radius). */
+ *  (0, LOCOMOTION_MAX_SPEED], non-finite or absurd distance, angle or radius: over 100 m, 36000 degrees,
+ *  or an arc with a wheel distance over 1000 m). */
 uint8_t locomotion_straight(uint16_t id, float distance_m, float speed_mps);
 uint8_t locomotion_rotate(uint16_t id, float angle_deg, float speed_mps);
 uint8_t locomotion_arc(uint16_t id, float radius_m, float angle_deg, float speed_mps);
@@ -33,8 +36,8 @@ uint8_t locomotion_teleop(float left_mps, float right_mps);
 
 /** Line following: enters line follow mode (clears the queue). */
 void locomotion_line_follow_begin(void);
-/** Line following: the wheel speed set points of this tick. */
-void locomotion_line_follow_set(float left_mps, float right_mps);
+/** Line following: the wheel speed set points of this tick, um/s. */
+void locomotion_line_follow_set(int32_t left_umps, int32_t right_umps);
 
 /** \return the coasting time learnt so far, s: movements cut the motors when the remaining distance is
  *  within speed x this time. */

@@ -1,47 +1,23 @@
 #include "pid.h"
 
-#include <string.h>
+#define Q_SCALE 65536.0f /* 2^PID_Q */
 
-/* Software floats are slow on the AVR (a compare costs as much as 40 integer instructions); IEEE 754
- * magnitudes order like their bit patterns, so clamps compare integers. */
-static uint32_t magnitude_bits(float v)
+void pid_gains_convert(pid_gains_t *out, const pb_pid_t *g, float err_per_si, float out_per_si)
 {
-    uint32_t b;
-    memcpy(&b, &v, sizeof b);
-    return b & 0x7FFFFFFFul;
+    float scale = out_per_si * Q_SCALE;
+    float per_err = scale / err_per_si;
+    out->kp = fx_gain(g->kp * per_err);
+    out->ki = fx_gain(g->ki * per_err);
+    out->kd = fx_gain(g->kd * per_err);
+    /* ki * i_limit is in output units whatever the error unit; saturates like the output would. */
+    float lim = g->ki * g->i_limit * scale;
+    out->i_limit = !(lim > 0.0f) ? 0 : lim < 2147483520.0f ? (int32_t)(lim + 0.5f) : FX_MAX;
 }
-
-#define NAN_OR_INF_BITS 0x7F800000ul
 
 void pid_reset(pid_state_t *s)
 {
-    s->sum = 0.0f;
-    s->prev = 0.0f;
+    s->i = 0;
+    s->prev = 0;
     s->primed = 0;
 }
 
-float pid_clamp(float v, float limit)
-{
-    uint32_t m = magnitude_bits(v);
-    if (m > NAN_OR_INF_BITS) /* NaN */
-        return 0.0f;
-    if (m > magnitude_bits(limit))
-        return v < 0.0f ? -limit : limit;
-    return v;
-}
-
-float pid_update(pid_state_t *s, const pb_pid_t *g, float e, float out_limit)
-{
-    e = pid_clamp(e, PID_ERROR_LIMIT);
-    /* settings_write() keeps the gains and i_limit within 0..1e6, so every term stays finite. */
-    float u = g->kp * e;
-    if (magnitude_bits(g->ki) != 0) {
-        s->sum = pid_clamp(s->sum + e, g->i_limit);
-        u += g->ki * s->sum;
-    }
-    if (magnitude_bits(g->kd) != 0 && s->primed)
-        u += g->kd * (e - s->prev);
-    s->prev = e;
-    s->primed = 1;
-    return pid_clamp(u, out_limit);
-}

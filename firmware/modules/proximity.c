@@ -19,9 +19,15 @@ typedef struct {
     uint32_t robot_ms;          /* when the robot was last heard */
     uint32_t obstacle_ms;       /* when our own reflection was last heard */
     uint8_t heard_robot, heard_obstacle;
+    /* What robot_state shows changes only when a message is heard or a sighting expires: publish() runs
+     * then, not every tick. */
+    uint8_t dirty;       /* heard something since the last publish() */
+    uint8_t expiring;    /* a sighting is live: publish() again at recheck_ms */
+    uint32_t recheck_ms; /* when the earliest live sighting expires */
 } side_t;
 
 static side_t sides[2];
+static uint16_t published_hold; /* settings.proximity.hold_ms at the last publish() */
 
 /* Beacon transmission, driven from the scheduler interrupts. */
 static volatile uint8_t burst_msg;    /* next message of the running beacon */
@@ -93,6 +99,8 @@ static void beacon(void)
 void proximity_init(void)
 {
     memset(sides, 0, sizeof sides);
+    sides[0].dirty = sides[1].dirty = 1;
+    published_hold = settings.proximity.hold_ms;
     memset(&last_fwd, 0, sizeof last_fwd);
     burst_msg = burst_msgs = 0;
     level = 0;
@@ -137,6 +145,7 @@ static void heard(uint8_t side_no, const hal_ir_msg_t *m, uint32_t now)
 {
     side_t *s = &sides[side_no];
     uint16_t hold = settings.proximity.hold_ms;
+    s->dirty = 1;
     if (m->sender_id == settings.identity.robot_id) {
         s->obstacle_ms = now;
         s->heard_obstacle = 1;
@@ -170,34 +179,61 @@ static void heard(uint8_t side_no, const hal_ir_msg_t *m, uint32_t now)
     }
 }
 
+/* Whether a sighting at `t` is live at `now`; the age of the oldest live one so far goes to *oldest (+1):
+ * it is the first to expire. */
+static inline __attribute__((always_inline)) bool live(uint32_t t, uint32_t now, uint16_t hold, uint16_t *oldest)
+{
+    uint32_t age = now - t;
+    if (age >= hold)
+        return false;
+    if ((uint16_t)age >= *oldest)
+        *oldest = (uint16_t)(age + 1u);
+    return true;
+}
+
 static void publish(pb_proximity_side_t *out, side_t *s, uint32_t now)
 {
     uint16_t hold = settings.proximity.hold_ms;
+    uint16_t oldest = 0;
     uint8_t flags = 0;
-    if (s->heard_obstacle && now - s->obstacle_ms < hold)
+    if (s->heard_obstacle && live(s->obstacle_ms, now, hold, &oldest))
         flags |= PROXIMITY_FLAG_OBSTACLE;
     uint8_t cls = PB_DISTANCE_CLASS_NONE;
-    if (s->heard_robot && now - s->robot_ms < hold) {
+    if (s->heard_robot && live(s->robot_ms, now, hold, &oldest)) {
         flags |= PROXIMITY_FLAG_ROBOT;
+        /* Lower classes that expire before this one change nothing; when it expires, this runs again. */
         for (uint8_t c = 3; c > 0 && cls == PB_DISTANCE_CLASS_NONE; c--)
-            if (s->class_ms[c] && now - s->class_ms[c] < hold)
+            if (s->class_ms[c] && live(s->class_ms[c], now, hold, &oldest))
                 cls = c;
     } else {
         s->heard_robot = 0;
     }
+    s->dirty = 0;
+    s->expiring = oldest != 0;
+    s->recheck_ms = now + (uint16_t)(hold - (oldest - 1u)); /* when the oldest live one reaches hold */
     out->flags = flags;
     out->robot_id = (flags & PROXIMITY_FLAG_ROBOT) ? s->robot_id : 0;
     out->robot_led = (flags & PROXIMITY_FLAG_ROBOT) ? s->led : 0;
     out->distance = cls;
 }
 
+static void publish_if_changed(pb_proximity_side_t *out, side_t *s, uint32_t now, bool hold_changed)
+{
+    if (s->dirty || hold_changed || (s->expiring && (int32_t)(now - s->recheck_ms) >= 0))
+        publish(out, s, now);
+}
+
 void proximity_task(void)
 {
     uint32_t now = robot_state.time.time_ms;
     uint8_t side;
-    hal_ir_msg_t m;
-    while (ir_receive(&side, &m))
-        heard(side, &m, now);
-    publish(&robot_state.proximity.front, &sides[0], now);
-    publish(&robot_state.proximity.rear, &sides[1], now);
+    const hal_ir_msg_t *m;
+    while ((m = ir_peek(&side)) != NULL) {
+        heard(side, m, now);
+        ir_pop();
+    }
+    bool hold_changed = published_hold != settings.proximity.hold_ms;
+    published_hold = settings.proximity.hold_ms;
+    publish_if_changed(&robot_state.proximity.front, &sides[0], now, hold_changed);
+    publish_if_changed(&robot_state.proximity.rear, &sides[1], now, hold_changed);
 }

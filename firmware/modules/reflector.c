@@ -33,7 +33,7 @@ void reflector_task(void)
     last_sent_ms = (now - last_sent_ms < 2u * period) ? last_sent_ms + period : now;
     bool sent;
     if (settings.sync.mode == PB_SYNC_MODE_FULL) {
-        sent = comm_send(PB_PKT_STATE_FULL, &robot_state, sizeof robot_state);
+        sent = comm_send_streamed(PB_PKT_STATE_FULL, &robot_state, sizeof robot_state);
     } else {
         pb_state_reduced_t r;
         r.time_ms = robot_state.time.time_ms;

@@ -81,8 +81,28 @@ uint16_t pb_frame_encode(uint8_t *out, uint8_t type, uint8_t seq, const void *pa
     return (uint16_t)(body + PB_FRAME_CRC_SIZE);
 }
 
+/* Types below LOOKUP_TYPES (all of them today) find their entry through a table built once: a received
+ * frame costs one index instead of a search of the flash table. */
+#define LOOKUP_TYPES 64u
+static uint8_t slot_of[LOOKUP_TYPES]; /* entry index + 1, 0 for an unknown type */
+static uint8_t slots_built;
+
+void pb_packet_lookup_init(void)
+{
+    if (slots_built)
+        return;
+    for (uint8_t i = 0; i < PB_PACKET_INFO_COUNT; i++)
+        if (pb_packet_info[i].type < LOOKUP_TYPES && !slot_of[pb_packet_info[i].type])
+            slot_of[pb_packet_info[i].type] = (uint8_t)(i + 1u);
+    slots_built = 1;
+}
+
 const PB_FLASH pb_packet_info_t *pb_packet_lookup(uint8_t type)
 {
+    if (type < LOOKUP_TYPES) {
+        pb_packet_lookup_init();
+        return slot_of[type] ? &pb_packet_info[slot_of[type] - 1u] : NULL;
+    }
     for (uint8_t i = 0; i < PB_PACKET_INFO_COUNT; i++)
         if (pb_packet_info[i].type == type)
             return &pb_packet_info[i];

@@ -43,6 +43,9 @@ uint8_t pb_frame_check(const uint8_t *buf, uint16_t n, pb_frame_t *out);
  */
 uint16_t pb_frame_encode(uint8_t *out, uint8_t type, uint8_t seq, const void *payload, uint8_t len);
 
+/** Builds the index pb_packet_lookup() uses (else its first call does). */
+void pb_packet_lookup_init(void);
+
 /** \return the packet table entry of `type`, or NULL if the type is unknown. */
 const PB_FLASH pb_packet_info_t *pb_packet_lookup(uint8_t type);
 

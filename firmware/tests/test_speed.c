@@ -11,16 +11,21 @@
 
 static void speed_from_one_and_two_periods(void)
 {
-    float p = 0.001f;                    /* 1 mm pulses */
-    uint32_t ms10 = HAL_CAPTURE_HZ / 100; /* 10 ms */
-    CHECK(fabsf(speed_from_periods(p, ms10, 0, 10 * ms10) - 0.1f) < 1e-6f, "one period: 1 mm / 10 ms");
+    world_reset(1);
+    double pulse_um = M_PI * 9000.0 / 40.0; /* the default geometry: 0.707 mm pulses */
+    uint32_t ms10 = HAL_CAPTURE_HZ / 100;   /* 10 ms */
+    double expect = pulse_um / 0.010;       /* um/s */
+    CHECK(fabs(speed_from_periods(ms10, 0, 10 * ms10) - expect) < 2.0, "one period: a pulse in 10 ms, %d um/s",
+          speed_from_periods(ms10, 0, 10 * ms10));
     /* Unequal stripes: 8 ms and 12 ms average to 10 ms. */
-    float v = speed_from_periods(p, ms10 * 8 / 10, ms10 * 12 / 10, 10 * ms10);
-    CHECK(fabsf(v - 0.1f) < 1e-6f, "average of two periods %f", (double)v);
-    CHECK(speed_from_periods(p, 11 * ms10, ms10, 10 * ms10) == 0.0f, "a period beyond the timeout is standstill");
-    CHECK(speed_from_periods(p, 0, 0, 10 * ms10) == 0.0f, "no period, no speed");
-    CHECK(speed_from_periods(p, 1, 1, 10 * ms10) > 0.0f && isfinite(speed_from_periods(p, 1, 1, 10 * ms10)),
-          "shortest period finite");
+    int32_t v = speed_from_periods(ms10 * 8 / 10, ms10 * 12 / 10, 10 * ms10);
+    CHECK(fabs(v - expect) < 2.0, "average of two periods %d um/s", v);
+    CHECK(speed_from_periods(11 * ms10, ms10, 10 * ms10) == 0, "a period beyond the timeout is standstill");
+    CHECK(speed_from_periods(0, 0, 10 * ms10) == 0, "no period, no speed");
+    v = speed_from_periods(1, 1, 10 * ms10);
+    CHECK(v > 3900000 && v <= 4000000, "shortest period saturates at 4 m/s: %d", v);
+    v = speed_from_periods(HAL_CAPTURE_HZ / 1000, HAL_CAPTURE_HZ / 1000, 10 * ms10); /* 2 m/s rounds to 1 um/s */
+    CHECK(fabs(v - pulse_um / 0.001) < 4.0, "fast: %d um/s", v);
 }
 
 static void measured_speed_is_smooth_over_unequal_stripes_and_times_out(void)
@@ -70,7 +75,7 @@ static void distance_is_extrapolated_within_a_pulse(void)
     double worst = 0;
     for (int i = 0; i < 40; i++) {
         world_run_ms(1);
-        double err = fabs(speed_distance_m(0) - world.pos[0]);
+        double err = fabs(speed_position_um(0) * 1e-6 - world.pos[0]);
         worst = err > worst ? err : worst;
     }
     CHECK(worst < 0.0005, "extrapolation error %.3f mm (a pulse is 0.707 mm)", worst * 1000);
