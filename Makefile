@@ -23,7 +23,7 @@ HELLO_MAIN          ?= org.pocketbot.examples.HelloRobotKt
 EMULATOR_MAIN       ?= org.pocketbot.emulator.cli.MainKt
 # Placeholders until the benchmark mains exist (set by the emulator / SDK issues).
 BENCH_EMULATOR_MAIN ?= org.pocketbot.emulator.bench.EmulatorBenchKt
-BENCH_SDK_MAIN      ?= org.openjdk.jmh.Main
+BENCH_SDK_MAIN      ?= org.pocketbot.bench.SdkBenchKt
 # Jazzer: JAZZER_FUZZ=1 turns @FuzzTest from regression (seeds only) into real fuzzing; it fuzzes
 # one @FuzzTest per run, so pick it with FUZZ_TEST.
 FUZZ_TEST           ?= *FuzzTest
@@ -82,19 +82,21 @@ hello: wasm
 	$(JAVA) -cp "$(call cp_of,examples)" $(HELLO_MAIN) $(ARGS)
 
 emulator: wasm
-	@$(MAKE) --no-print-directory $(RUN_STAMP)
-	$(JAVA) -cp "$(call cp_of,emulator)" $(EMULATOR_MAIN) $(ARGS)
+	@if [ ! -f emulator/target/classpath.txt ] || [ -n "$$(find pom.xml sdk/core emulator $(WASM) -path '*/target' -prune -o -type f \( -name '*.kt' -o -name pom.xml -o -name '*.json' -o -name '*.wasm' \) -newer emulator/target/classpath.txt -print 2>/dev/null | head -1)" ]; then \
+	  $(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true && touch emulator/target/classpath.txt; fi
+	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(EMULATOR_MAIN) $(ARGS)
 
 bench: bench-emulator bench-sdk
 	$(MAKE) -C firmware bench
 
 bench-emulator: wasm
-	@$(MAKE) --no-print-directory $(RUN_STAMP)
-	$(JAVA) -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
+	@if [ ! -f emulator/target/classpath.txt ] || [ -n "$$(find pom.xml sdk/core emulator $(WASM) -path '*/target' -prune -o -type f \( -name '*.kt' -o -name pom.xml -o -name '*.json' -o -name '*.wasm' \) -newer emulator/target/classpath.txt -print 2>/dev/null | head -1)" ]; then \
+	  $(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true && touch emulator/target/classpath.txt; fi
+	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
 
 bench-sdk: wasm
-	@$(MAKE) --no-print-directory $(RUN_STAMP)
-	$(JAVA) -cp "$(call cp_of,examples)" $(BENCH_SDK_MAIN) $(ARGS)
+	$(MAVEN) package -pl sdk/bench -am -DskipTests -Dpocketbot.jsgate.skip=true
+	$(JAVA) -cp "$(call cp_of,sdk/bench)" $(BENCH_SDK_MAIN) $(ARGS)
 
 fuzz: wasm
 	$(MAKE) -C firmware fuzz

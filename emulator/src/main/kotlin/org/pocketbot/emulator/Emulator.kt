@@ -1,0 +1,300 @@
+package org.pocketbot.emulator
+
+import org.pocketbot.emulator.firmware.FirmwareImage
+import org.pocketbot.emulator.internal.ParallelStepper
+import org.pocketbot.emulator.physics.RobotParams
+import org.pocketbot.emulator.transport.ControlPort
+import org.pocketbot.emulator.transport.InProcessDiscoverer
+import org.pocketbot.emulator.transport.TcpEndpoint
+import org.pocketbot.emulator.world.Pose
+import org.pocketbot.emulator.world.World
+import org.pocketbot.emulator.world.Worlds
+import org.pocketbot.sdk.transport.Discoverer
+import java.security.MessageDigest
+import java.nio.ByteBuffer
+import kotlin.time.Duration
+
+/** How fast simulated time runs when the emulator runs on its own thread. */
+public sealed interface Speed {
+    /** Simulated time runs at [factor] times the wall clock (1.0 = real time). */
+    public data class Realtime(val factor: Double = 1.0) : Speed {
+        init { require(factor > 0) { "factor must be positive" } }
+    }
+
+    /** As fast as the machine allows. */
+    public data object AsFastAsPossible : Speed
+}
+
+/** Settings of an [Emulator]. */
+public data class EmulatorConfig(
+    /** Seeds every random effect (sensor noise, encoder phases, link faults): same world + seed = same run. */
+    val seed: Long = 1,
+    /** The firmware every robot runs; by default the build-time compiled firmware. */
+    val firmware: FirmwareImage? = null,
+    val robotParams: RobotParams = RobotParams(),
+    val noise: NoiseSettings = NoiseSettings(),
+    /** Threads that step robots (the caller's included); results do not depend on it. */
+    val threads: Int = Runtime.getRuntime().availableProcessors().coerceIn(1, 8),
+    /** Below this many robots one thread steps them all; from it on, the emulator measures serial and parallel stepping and uses the faster. */
+    val parallelFrom: Int = 4,
+)
+
+/**
+ * Runs simulated PocketBot2 robots, each with its own instance of the real firmware (WebAssembly under
+ * Chicory), in lockstep 1 ms steps of simulated time: deterministic for a world and seed.
+ *
+ * Drive it either synchronously ([step], [runFor], [runUntil]; tests) or on its own thread ([start] with a
+ * [Speed], [pause], [resume], [singleStep]; interactive use). All methods are safe to call from any thread.
+ *
+ * ```
+ * Emulator(Worlds.load("round")).use { emu ->
+ *     val robot = emu.addRobot()
+ *     val transport = robot.openTransport()        // or emu.discoverer(), or robot.startTcp()
+ *     emu.runFor(2.seconds)
+ *     println(robot.truePose)
+ * }
+ * ```
+ */
+public class Emulator(world: World, public val config: EmulatorConfig = EmulatorConfig()) : AutoCloseable {
+    private val lock = Any()
+    internal val sim = SimWorld(world)
+    private val image: FirmwareImage by lazy { config.firmware ?: FirmwareImage.compiled() }
+    private val handles = ArrayList<RobotHandle>()
+    private val stepper = ParallelStepper(config.threads)
+    private val deferred = ArrayList<SimRobot>()
+    private var serialNs = 0L
+    private val modes = StepModeChooser(config.threads, config.parallelFrom) { (stepper.takeCounts() + " serial part ${serialNs / 1000} us").also { serialNs = 0 } }
+    private var nowTicks = 0L
+
+    @Volatile private var loop: Thread? = null
+    @Volatile private var running = false
+    @Volatile private var paused = false
+    @Volatile public var speed: Speed = Speed.Realtime(1.0)
+    private var controlPort: ControlPort? = null
+
+    public val world: World get() = sim.spec
+
+    /** Simulated time since the start, in 32 MHz ticks. */
+    public val timeTicks: Long get() = synchronized(lock) { nowTicks }
+    public val time: Duration get() = SimTime.toDuration(timeTicks)
+
+    public val robots: List<RobotHandle> get() = synchronized(lock) { handles.toList() }
+
+    public fun robot(id: Int): RobotHandle = robots.firstOrNull { it.id == id } ?: throw NoSuchElementException("no robot $id")
+
+    /**
+     * Adds a robot with [id] (default: next free, from 1) at [pose] (default: the world's next start pose) and
+     * boots its firmware at the current time.
+     */
+    public fun addRobot(id: Int? = null, pose: Pose? = null): RobotHandle = synchronized(lock) {
+        // Ids are bytes on the wire (1..254): a fleet larger than that reuses them, as real robots would have to.
+        val rid = id ?: (handles.size % 254 + 1)
+        require(rid in 1..254) { "robot id $rid out of 1..254" }
+        require(id == null || handles.none { it.id == rid }) { "robot id $rid exists" }
+        val start = pose ?: world.starts.getOrNull(handles.size) ?: world.starts.firstOrNull()
+            ?: Pose(world.widthM / 2, world.heightM / 2, 0.0)
+        val r = SimRobot(rid, handles.size, config.robotParams, sim, image, start, config.seed, config.noise)
+        r.bootAt(nowTicks)
+        sim.robots += r
+        RobotHandle(this, r, lock).also { handles += it }
+    }
+
+    /** Advances simulated time by [steps] milliseconds. */
+    public fun step(steps: Int = 1) {
+        repeat(steps) { synchronized(lock) { stepLocked() } }
+    }
+
+    public fun runFor(duration: Duration) {
+        val steps = (SimTime.fromDuration(duration) / SimTime.STEP_TICKS).toInt()
+        var done = 0
+        while (done < steps) {
+            val n = minOf(50, steps - done)
+            synchronized(lock) { repeat(n) { stepLocked() } }
+            done += n
+        }
+    }
+
+    /** Steps until [condition] holds (checked every step) or [timeout] of simulated time passed; true if it held. */
+    public fun runUntil(timeout: Duration, condition: () -> Boolean): Boolean {
+        val end = timeTicks + SimTime.fromDuration(timeout)
+        while (timeTicks < end) {
+            if (condition()) return true
+            step()
+        }
+        return condition()
+    }
+
+    private fun stepLocked() {
+        val t0 = nowTicks
+        val t1 = t0 + SimTime.STEP_TICKS
+        val rs = sim.robots
+        val n = rs.size
+        val parallel = modes.parallel(n)
+        val start = System.nanoTime()
+        if (parallel) stepper.run(n) { i -> phaseA(rs[i], t0, t1) } else for (i in 0 until n) phaseA(rs[i], t0, t1)
+        val phaseEnd = System.nanoTime()
+        deferred.clear()
+        for (i in 0 until n) if (rs[i].deferred) deferred += rs[i]
+        if (deferred.isNotEmpty()) {
+            sim.resolvePushes(deferred)
+            for (r in deferred) r.moveAndRun(t0, t1)
+        }
+        sim.afterStep()
+        val end = System.nanoTime()
+        serialNs += end - phaseEnd
+        modes.record(parallel, end - start, n)
+        nowTicks = t1
+    }
+
+    private fun phaseA(r: SimRobot, t0: Long, t1: Long) {
+        r.motorUpdate()
+        r.deferred = r.contactBox >= 0
+        if (!r.deferred) r.moveAndRun(t0, t1)
+    }
+
+    // ---- running on its own thread ------------------------------------------------------------------------------
+
+    /** Runs on a background thread at [speed] until [stop] or [close]. */
+    public fun start(speed: Speed = this.speed) {
+        this.speed = speed
+        if (loop != null) return
+        running = true
+        paused = false
+        loop = Thread({ runLoop() }, "emulator-loop").apply { isDaemon = true; start() }
+    }
+
+    public fun pause() { paused = true }
+    public fun resume() { paused = false }
+    public val isPaused: Boolean get() = paused
+
+    /** While paused (or not started): advances exactly one 1 ms step. */
+    public fun singleStep() { step(1) }
+
+    public fun stop() {
+        running = false
+        loop?.let { if (it !== Thread.currentThread()) it.join(2000) }
+        loop = null
+    }
+
+    private fun runLoop() {
+        var wallStart = System.nanoTime()
+        var simStart = timeTicks
+        var lastSpeed = speed
+        var wasPaused = false
+        while (running) {
+            if (paused) { wasPaused = true; Thread.sleep(5); continue }
+            val sp = speed
+            if (wasPaused || sp != lastSpeed) { wallStart = System.nanoTime(); simStart = timeTicks; lastSpeed = sp; wasPaused = false }
+            when (sp) {
+                Speed.AsFastAsPossible -> synchronized(lock) { repeat(20) { stepLocked() } }
+                is Speed.Realtime -> {
+                    val elapsedNs = System.nanoTime() - wallStart
+                    val target = simStart + (elapsedNs * sp.factor * SimTime.TICKS_PER_SECOND / 1e9).toLong()
+                    val behind = (target - timeTicks) / SimTime.STEP_TICKS
+                    if (behind <= 0) Thread.sleep(1)
+                    else synchronized(lock) { repeat(minOf(behind, 200L).toInt()) { stepLocked() } }
+                }
+            }
+        }
+    }
+
+    // ---- connections ------------------------------------------------------------------------------------------
+
+    /** Finds this emulator's robots, in process (each opens an [org.pocketbot.emulator.transport.InProcessTransport]). */
+    public fun discoverer(): Discoverer = InProcessDiscoverer { robots.map { it.device() } }
+
+    /**
+     * Opens a TCP endpoint (SLIP frames, like a Bluetooth serial link) for every robot on 127.0.0.1, robot i at
+     * [basePort] + i (0: any free port), and the control port (see emulator/README.md) at [controlPort]
+     * (0: any free port, -1: none). Returns the control port's number, or -1.
+     */
+    public fun startTcp(basePort: Int = 0, controlPort: Int = -1): Int {
+        for ((i, h) in robots.withIndex()) h.startTcp(if (basePort == 0) 0 else basePort + i)
+        if (controlPort >= 0) {
+            val cp = ControlPort(controlPort) { robots }
+            this.controlPort = cp
+            return cp.port
+        }
+        return -1
+    }
+
+    // ---- ground truth -----------------------------------------------------------------------------------------
+
+    /** Positions of the world's boxes now (same order as [World.boxes]). */
+    public fun boxes(): List<Pose> = synchronized(lock) { sim.boxes.map { Pose(it.x, it.y, it.spec.angleDeg) } }
+
+    /**
+     * A hash of everything simulated: time, every robot's true pose, wheel travel and whole firmware memory,
+     * the bytes its link delivered to a host (count and CRC-32), and the boxes. Two runs of the same world, seed and host traffic give the same hash.
+     */
+    public fun stateHash(): String = synchronized(lock) {
+        val md = MessageDigest.getInstance("SHA-256")
+        val buf = ByteBuffer.allocate(8 * 8)
+        fun put(vararg v: Double) { buf.clear(); for (d in v) buf.putDouble(d); md.update(buf.array(), 0, buf.position()) }
+        buf.clear(); buf.putLong(nowTicks); md.update(buf.array(), 0, 8)
+        for (r in sim.robots) {
+            put(r.x, r.y, r.theta, r.distL, r.distR, r.vl, r.vr)
+            val mem = r.firmware.memory
+            md.update(mem.readBytes(0, mem.pages() * 65536))
+            buf.clear(); buf.putLong(r.link.bytesToHost); buf.putLong(r.link.bytesToHostCrc); md.update(buf.array(), 0, 16)
+        }
+        for (b in sim.boxes) put(b.x, b.y)
+        md.digest().joinToString("") { "%02x".format(it) }
+    }
+
+    override fun close() {
+        stop()
+        controlPort?.close()
+        for (h in robots) { h.closeTcp(); h.sim.link.dropConnection("emulator closed") }
+        stepper.close()
+    }
+
+    public companion object {
+        /** An emulator of [world] (a name from emulator/worlds) with [robots] robots at the world's start poses. */
+        public fun local(robots: Int = 1, world: String = "straight", config: EmulatorConfig = EmulatorConfig()): Emulator =
+            Emulator(Worlds.load(world), config).also { emu -> repeat(robots) { emu.addRobot() } }
+    }
+}
+
+/**
+ * Picks serial or parallel stepping by measuring both: handing a step to other threads pays off only when the
+ * step is long enough and the other cores are free, which depends on the fleet and on the machine's load at
+ * the time. Either mode gives exactly the same results.
+ */
+private class StepModeChooser(private val threads: Int, private val parallelFrom: Int, private val counts: () -> String) {
+    private var robots = -1
+    private var current = false
+    private var steps = 0
+    private var epochNs = 0L
+    private var epochs = 0
+    private val avgNs = doubleArrayOf(Double.NaN, Double.NaN) // serial, parallel
+
+    fun parallel(n: Int): Boolean {
+        if (threads <= 1 || n < parallelFrom) return false
+        if (n != robots) { robots = n; avgNs.fill(Double.NaN); current = true; steps = 0; epochNs = 0; epochs = 0 }
+        return current
+    }
+
+    fun record(parallel: Boolean, ns: Long, n: Int) {
+        if (threads <= 1 || n < parallelFrom || n != robots || parallel != current) return
+        epochNs += ns
+        if (++steps < EPOCH) return
+        val k = if (current) 1 else 0
+        val perStep = epochNs.toDouble() / steps
+        avgNs[k] = if (avgNs[k].isNaN()) perStep else avgNs[k] * 0.5 + perStep * 0.5
+        steps = 0; epochNs = 0; epochs++
+        if (DEBUG) System.err.println("step modes: robots=$robots epoch=$epochs ${if (k == 1) "parallel" else "serial"} ${"%.1f".format(perStep / 1000)} us/step; avg serial=${"%.1f".format(avgNs[0] / 1000)} parallel=${"%.1f".format(avgNs[1] / 1000)} tasks by thread ${counts()}")
+        val other = 1 - k
+        current = when {
+            avgNs[other].isNaN() -> other == 1
+            epochs % PROBE_EVERY == 0 -> other == 1 // look at the other mode again now and then
+            else -> avgNs[1] < avgNs[0]
+        }
+    }
+
+    private companion object {
+        val DEBUG = System.getProperty("pocketbot.emulator.debugModes") == "true"
+        const val EPOCH = 250
+        const val PROBE_EVERY = 8
+    }
+}

@@ -1,0 +1,123 @@
+package org.pocketbot.emulator
+
+import org.pocketbot.emulator.link.LinkSettings
+import org.pocketbot.emulator.transport.InProcessDevice
+import org.pocketbot.emulator.transport.InProcessTransport
+import org.pocketbot.emulator.transport.TcpEndpoint
+import org.pocketbot.emulator.world.Pose
+import org.pocketbot.protocol.Crc16
+import org.pocketbot.protocol.FrameResult
+import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.ProtocolInfo
+import org.pocketbot.protocol.RobotState
+import org.pocketbot.protocol.StateFull
+import org.pocketbot.sdk.transport.RobotDevice
+import org.pocketbot.sdk.transport.Transport
+
+/** Total travel of each wheel on the ground, in metres (signed: backwards is negative). */
+public data class WheelDistances(val leftM: Double, val rightM: Double)
+
+/**
+ * One robot of an [Emulator]: its ground truth, its firmware's own state read straight from WebAssembly memory,
+ * its connections, and fault injection. Safe to call from any thread; reads are consistent with a step boundary.
+ */
+public class RobotHandle internal constructor(
+    internal val emulator: Emulator,
+    internal val sim: SimRobot,
+    private val lock: Any,
+) {
+    public val id: Int get() = sim.id
+
+    /** The name the firmware advertises (settings.identity.name), e.g. `PocketBot-3`. */
+    public val name: String get() = synchronized(lock) {
+        val bytes = sim.firmware.readBytes(sim.firmware.settingsAddress + 1, 16)
+        val end = bytes.indexOf(0).let { if (it < 0) bytes.size else it }
+        String(bytes, 0, end, Charsets.US_ASCII)
+    }
+
+    /** True pose of the axle midpoint (m, degrees counter-clockwise from +x). */
+    public val truePose: Pose get() = synchronized(lock) { Pose(sim.x, sim.y, Math.toDegrees(sim.theta)) }
+
+    /** True travel of both wheels since the robot was added. */
+    public val trueWheelDistances: WheelDistances get() = synchronized(lock) { WheelDistances(sim.distL, sim.distR) }
+
+    /** Motor duty the firmware drives now, permille. */
+    public val pwmPermille: Pair<Int, Int> get() = synchronized(lock) { Pair((sim.dutyL * 1000).toInt(), (sim.dutyR * 1000).toInt()) }
+
+    /** The status LED bit mask the firmware drives. */
+    public val led: Int get() = synchronized(lock) { sim.led }
+
+    /** The firmware's robot_state bytes, straight from its linear memory. */
+    public fun stateBytes(): ByteArray = synchronized(lock) { sim.firmware.readBytes(sim.firmware.stateAddress, ProtocolInfo.STATE_SIZE) }
+
+    /** The firmware's settings bytes. */
+    public fun settingsBytes(): ByteArray = synchronized(lock) { sim.firmware.readBytes(sim.firmware.settingsAddress, ProtocolInfo.SETTINGS_SIZE) }
+
+    /** The firmware's robot_state, decoded with the SDK's codec. */
+    public fun state(): RobotState {
+        val payload = stateBytes()
+        // Decoded through the public frame codec: a state_full frame around the raw struct.
+        val frame = ByteArray(Frames.HEADER_SIZE + payload.size + Frames.CRC_SIZE)
+        frame[0] = StateFull.TYPE.toByte(); frame[1] = 0; frame[2] = payload.size.toByte()
+        payload.copyInto(frame, Frames.HEADER_SIZE)
+        val crc = Crc16.compute(frame, 0, Frames.HEADER_SIZE + payload.size)
+        frame[frame.size - 2] = crc.toByte(); frame[frame.size - 1] = (crc shr 8).toByte()
+        return when (val r = Frames.decode(frame)) {
+            is FrameResult.Decoded -> (r.packet as StateFull).state
+            is FrameResult.Failed -> error("robot_state in memory does not decode: ${r.error}")
+        }
+    }
+
+    /** Puts the robot somewhere else (a hand lifting and placing it); the wheels stop. */
+    public fun place(pose: Pose): Unit = synchronized(lock) { sim.place(pose) }
+
+    // ---- link and faults ----------------------------------------------------------------------------------------
+
+    /** The link model now; assign to change it while running (fault injection). */
+    public var link: LinkSettings
+        get() = sim.link.settings
+        set(value) { sim.link.applySettings(value) }
+
+    /** Sensor noise and wheel slip of this robot; assign to change them while running. */
+    public var noise: NoiseSettings
+        get() = sim.noise
+        set(value) = synchronized(lock) { sim.noise = value }
+
+    /** Takes the link down: host connections are lost and nothing passes until [reconnectLink]. */
+    public fun disconnectLink() { link = link.copy(connected = false) }
+
+    public fun reconnectLink() { link = link.copy(connected = true) }
+
+    /** Bytes the link delivered to a host, lost, and corrupted so far. */
+    public val linkBytesToHost: Long get() = sim.link.bytesToHost
+    public val linkBytesLost: Long get() = sim.link.bytesLost
+    public val linkBytesCorrupted: Long get() = sim.link.bytesCorrupted
+
+    // ---- connections --------------------------------------------------------------------------------------------
+
+    public val address: String get() = "emulator:$id"
+
+    /** Puts raw bytes (SLIP frames) on the robot's link as if a host had sent them, without a connection. */
+    public fun hostSendRaw(bytes: ByteArray) { sim.link.hostSend(bytes) }
+
+    /** Opens an in-process transport (SLIP through the simulated link). */
+    public fun openTransport(): Transport = InProcessTransport(sim.link, address)
+
+    /** This robot as a discoverable device. */
+    public fun device(): RobotDevice = InProcessDevice(name, address, sim.link)
+
+    private var tcp: TcpEndpoint? = null
+
+    /** The TCP port of this robot's endpoint on 127.0.0.1, or -1 when it has none. */
+    public val tcpPort: Int get() = tcp?.port ?: -1
+
+    /** Opens a TCP endpoint for this robot on 127.0.0.1:[port] (0: any free port); returns the port. */
+    public fun startTcp(port: Int = 0): Int = synchronized(this) {
+        tcp?.let { return it.port }
+        TcpEndpoint(sim.link, port, "robot-$id").also { tcp = it }.port
+    }
+
+    internal fun closeTcp() { synchronized(this) { tcp?.close(); tcp = null } }
+
+    override fun toString(): String = "robot $id"
+}

@@ -1,0 +1,356 @@
+package org.pocketbot.emulator
+
+import org.pocketbot.emulator.firmware.FirmwareHost
+import org.pocketbot.emulator.firmware.FirmwareImage
+import org.pocketbot.emulator.firmware.FirmwareInstance
+import org.pocketbot.emulator.firmware.SimSensor
+import org.pocketbot.emulator.link.RobotLink
+import org.pocketbot.emulator.physics.Obb
+import org.pocketbot.emulator.physics.RobotParams
+import org.pocketbot.emulator.world.Pose
+import java.util.SplittableRandom
+import kotlin.math.PI
+import kotlin.math.abs
+import kotlin.math.cos
+import kotlin.math.exp
+import kotlin.math.floor
+import kotlin.math.sin
+
+/**
+ * One simulated PocketBot2: its body and motors, its sensors, and its own firmware instance.
+ * Everything here runs on the emulator's stepping threads; users read it through [RobotHandle].
+ */
+internal class SimRobot(
+    val id: Int,
+    val index: Int,
+    val params: RobotParams,
+    private val world: SimWorld,
+    image: FirmwareImage,
+    start: Pose,
+    seed: Long,
+    @Volatile var noise: NoiseSettings,
+) : FirmwareHost {
+    // Pose of the axle midpoint; the body is centred on it.
+    var x = start.x
+    var y = start.y
+    var theta = Math.toRadians(start.headingDeg)
+
+    /** Ground speed of each wheel (m/s), the wheels' total travel (m, signed), and the motors' duty (-1..1). */
+    var vl = 0.0; var vr = 0.0
+    var distL = 0.0; var distR = 0.0
+    var dutyL = 0.0; var dutyR = 0.0
+    var led = 0
+
+    // Streams per robot (by its place in the fleet: ids repeat in fleets over 254), fixed by the seed.
+    private val sensorRng = SplittableRandom(seed * 0x9E3779B97F4A7C15uL.toLong() + index * 0x2545F491L + id)
+    val link = RobotLink(SplittableRandom(seed * 31 + index * 0x5DEECE66DL + id * 7919L + 7))
+
+    private val encPhaseL = sensorRng.nextDouble() * params.stripePairM
+    private val encPhaseR = sensorRng.nextDouble() * params.stripePairM
+    private val alpha = 1 - exp(-SimTime.STEP_S / params.motorTauS)
+
+    // Battery and temperature.
+    private var chargeUsedMah = 0.0
+    var currentMa = params.idleCurrentMa; private set
+    private var prevV = 0.0
+    private var accelXmg = 0.0
+    private var accelYmg = 0.0
+
+    // Line sensor spots, computed at most once per step when the firmware reads them.
+    private val spotDark = DoubleArray(8)
+    private var spotsValid = false
+    private var colourValid = false
+    private val colourRgb = DoubleArray(3)
+
+    // Box contact found at the end of the previous step.
+    var contactBox = -1
+    var pushDirX = 0.0; var pushDirY = 0.0
+
+    // IR messages sent during the step (delivered by SimWorld at the step's end) and received for the next step.
+    var irOutCount = 0
+    val irOutLed = IntArray(IR_CAP); val irOutPower = IntArray(IR_CAP); val irOutLen = IntArray(IR_CAP)
+    val irOutLo = IntArray(IR_CAP); val irOutHi = IntArray(IR_CAP); val irOutSender = IntArray(IR_CAP)
+    private var irInCount = 0
+    private val irIn = IntArray(IR_CAP * 7)
+    var irDropped = 0L; private set
+
+    val scratchObb = Obb()
+    val scratchOverlap = DoubleArray(3)
+    private val edgeTimes = LongArray(16)
+    private val edgeWheels = IntArray(16)
+    private val txBuf = ByteArray(RobotLink.MAX_TAKE)
+    private var txSteps = 0
+
+    val firmware = FirmwareInstance(image, this)
+
+    /** Set by the emulator while a step defers this robot to the serial contact phase. */
+    var deferred = false
+
+    /** Emulator time of sim_init: the firmware counts its ticks from there. */
+    var bootTicks = 0L; private set
+
+    fun bootAt(now: Long) {
+        bootTicks = now
+        firmware.init(id)
+        firmware.advance(0)
+        readOutputs()
+    }
+
+    /** Moves the robot (a hand placing it); the wheels stop. */
+    fun place(pose: Pose) {
+        x = pose.x; y = pose.y; theta = Math.toRadians(pose.headingDeg)
+        vl = 0.0; vr = 0.0; prevV = 0.0; contactBox = -1
+        spotsValid = false; colourValid = false
+    }
+
+    // ---- phase 1: motors --------------------------------------------------------------------------------------
+
+    fun motorUpdate() {
+        val vScale = batteryLoadedV() / params.nominalBatteryV
+        val v0 = params.noLoadSpeedMps
+        vl += (v0 * dutyL * vScale - vl) * alpha
+        vr += (v0 * dutyR * vScale - vr) * alpha
+    }
+
+    /** Stall force along the heading the motors make at their current duty (both wheels). */
+    fun driveForceN(): Double = params.stallForcePerWheelN * batteryLoadedV() / params.nominalBatteryV * (dutyL + dutyR)
+
+    val forwardSpeed: Double get() = (vl + vr) / 2
+
+    /** Limits the forward speed (a box or a wall in front), keeping the turn rate. */
+    fun limitForwardSpeed(max: Double) {
+        val excess = forwardSpeed - max
+        if (excess > 0) { vl -= excess; vr -= excess }
+    }
+
+    // ---- phase 2: move, then run the firmware through the step ------------------------------------------------
+
+    fun moveAndRun(t0: Long, t1: Long) {
+        val dt = SimTime.STEP_S
+        val dL = vl * dt
+        val dR = vr * dt
+        var gL = dL; var gR = dR
+        if (noise.wheelSlip > 0) {
+            gL *= 1 - noise.wheelSlip * sensorRng.nextDouble()
+            gR *= 1 - noise.wheelSlip * sensorRng.nextDouble()
+        }
+        val ds = (gL + gR) / 2
+        val dTheta = (gR - gL) / params.wheelBaseM
+        val mid = theta + dTheta / 2
+        x += ds * cos(mid); y += ds * sin(mid)
+        theta += dTheta
+        if (theta > PI) theta -= 2 * PI else if (theta < -PI) theta += 2 * PI
+
+        val v = ds / dt
+        accelXmg = (v - prevV) / dt / G * 1000
+        accelYmg = v * (dTheta / dt) / G * 1000
+        prevV = v
+
+        // Encoder edges of both wheels, in time order.
+        var nEdges = collectEdges(0, distL + encPhaseL, distL + dL + encPhaseL, t0, 0)
+        nEdges = collectEdges(1, distR + encPhaseR, distR + dR + encPhaseR, t0, nEdges)
+        distL += dL; distR += dR
+        for (i in 1 until nEdges) { // insertion sort, a handful at most
+            val t = edgeTimes[i]; val w = edgeWheels[i]; var j = i - 1
+            while (j >= 0 && edgeTimes[j] > t) { edgeTimes[j + 1] = edgeTimes[j]; edgeWheels[j + 1] = edgeWheels[j]; j-- }
+            edgeTimes[j + 1] = t; edgeWheels[j + 1] = w
+        }
+        spotsValid = false
+        colourValid = false
+
+        val fw = firmware
+        // IR heard at the end of the previous step.
+        if (irInCount > 0) {
+            for (k in 0 until irInCount) {
+                val o = k * 7
+                fw.irRx(irIn[o], irIn[o + 1], irIn[o + 2], irIn[o + 3], irIn[o + 4], irIn[o + 5], irIn[o + 6])
+            }
+            irInCount = 0
+        }
+        // Host bytes and encoder edges at their own times.
+        link.scheduleHostBytes(t0)
+        var e = 0
+        while (true) {
+            val te = if (e < nEdges) edgeTimes[e] else Long.MAX_VALUE
+            val tr = link.nextRxTime()
+            if (tr < t1 && tr <= te) {
+                fw.advance(tr - bootTicks); fw.uartRx(link.popRx())
+            } else if (te <= t1) {
+                fw.advance(te - bootTicks); fw.encoderEdge(edgeWheels[e], te - bootTicks); e++
+            } else break
+        }
+        fw.advance(t1 - bootTicks)
+        readOutputs()
+
+        // The UART drains at the baud rate. With no host attached the bytes go nowhere, so it is enough to
+        // drain every few steps (saving a call into the firmware per step); the firmware sees the same rate.
+        txSteps++
+        val allowance = link.txAllowance(t1 - t0)
+        if (allowance > 0 && (txSteps >= IDLE_TX_STEPS || link.isAttached)) {
+            txSteps = 0
+            val n = fw.uartTxTake(allowance)
+            if (n > 0) {
+                val mem = fw.memory
+                val base = fw.txBufferAddress
+                for (k in 0 until n) txBuf[k] = mem.read(base + k)
+                link.robotSent(txBuf, n, t0)
+            }
+        }
+        link.deliverToHost(t1)
+
+        updateBattery(dt)
+        world.checkContacts(this)
+    }
+
+    private fun collectEdges(wheel: Int, u0: Double, u1: Double, t0: Long, start: Int): Int {
+        if (u0 == u1) return start
+        var n = start
+        val p = params.stripePairM
+        val b = params.blackStripeShare * p
+        val e0 = edgeIndex(u0, p, b)
+        val e1 = edgeIndex(u1, p, b)
+        val span = u1 - u0
+        if (e1 > e0) {
+            var k = e0 + 1
+            while (k <= e1 && n < edgeTimes.size) { edgeTimes[n] = t0 + edgeTicks(edgePos(k, p, b) - u0, span); edgeWheels[n] = wheel; n++; k++ }
+        } else if (e0 > e1) {
+            var k = e0
+            while (k > e1 && n < edgeTimes.size) { edgeTimes[n] = t0 + edgeTicks(edgePos(k, p, b) - u0, span); edgeWheels[n] = wheel; n++; k-- }
+        }
+        return n
+    }
+
+    private fun edgeTicks(part: Double, span: Double): Long {
+        val f = (part / span).coerceIn(0.0, 1.0)
+        return Math.round(f * SimTime.STEP_TICKS).coerceAtLeast(1L)
+    }
+
+    private fun readOutputs() {
+        dutyL = (firmware.pwmLeft().coerceIn(-1000, 1000)) / 1000.0
+        dutyR = (firmware.pwmRight().coerceIn(-1000, 1000)) / 1000.0
+        led = firmware.led()
+    }
+
+    // ---- power ----------------------------------------------------------------------------------------------
+
+    private fun batteryOpenV(): Double {
+        val soc = (1 - chargeUsedMah / params.batteryCapacityMah).coerceIn(0.0, 1.0)
+        return params.batteryEmptyV + (params.batteryFullV - params.batteryEmptyV) * soc
+    }
+
+    fun batteryLoadedV(): Double = batteryOpenV() - currentMa / 1000 * params.batteryInternalOhm
+
+    private fun updateBattery(dt: Double) {
+        val v0 = params.noLoadSpeedMps
+        val iL = abs(dutyL - vl / v0).coerceAtMost(1.0) * params.motorStallCurrentMa
+        val iR = abs(dutyR - vr / v0).coerceAtMost(1.0) * params.motorStallCurrentMa
+        currentMa = params.idleCurrentMa + iL + iR
+        chargeUsedMah += currentMa * dt / 3600
+    }
+
+    // ---- FirmwareHost: the firmware reads its sensors and sends IR --------------------------------------------
+
+    override fun lineAdc(detector: Int, emitters: Int): Int {
+        if (detector !in 0..3) return 0
+        if (!spotsValid) computeSpots()
+        var v = world.ambientAdc.toDouble()
+        val white = params.lineSignalWhiteAdc
+        val span = params.lineSignalBlackAdc - white
+        if (emitters and (1 shl detector) != 0) v += white + span * spotDark[2 * detector]
+        if (emitters and (1 shl (detector + 1)) != 0) v += white + span * spotDark[2 * detector + 1]
+        if (noise.sensorNoise) v += gauss() * params.lineNoiseAdc
+        return v.toInt().coerceIn(0, 4095)
+    }
+
+    private fun computeSpots() {
+        val c = cos(theta); val s = sin(theta)
+        val a = params.lineSensorAheadM
+        for (j in 0 until 8) {
+            val lat = (3.5 - j) * params.lineSpotPitchM // spot 0 is the leftmost (+y in the robot frame)
+            spotDark[j] = world.surface.irDarkness(x + a * c - lat * s, y + a * s + lat * c, params.lineSpotRadiusM)
+        }
+        spotsValid = true
+    }
+
+    override fun sensorRead(sensor: Int): Int {
+        val n = noise.sensorNoise
+        return when (sensor) {
+            SimSensor.BATTERY_MV -> (batteryLoadedV() * 1000 + if (n) gauss() * 3 else 0.0).toInt()
+            SimSensor.CURRENT_MA -> currentMa.toInt()
+            SimSensor.MCU_TEMP_DC -> (250 + currentMa / 20).toInt()
+            SimSensor.ACCEL_X_MG -> (accelXmg + if (n) gauss() * 8 else 0.0).toInt().coerceIn(-16000, 16000)
+            SimSensor.ACCEL_Y_MG -> (accelYmg + if (n) gauss() * 8 else 0.0).toInt().coerceIn(-16000, 16000)
+            SimSensor.ACCEL_Z_MG -> (1000 + if (n) gauss() * 8 else 0.0).toInt()
+            SimSensor.COLOUR_R, SimSensor.COLOUR_G, SimSensor.COLOUR_B, SimSensor.COLOUR_CLEAR -> {
+                if (!colourValid) {
+                    val a = params.colourSensorAheadM
+                    world.surface.colourAt(x + a * cos(theta), y + a * sin(theta), params.colourSpotRadiusM, colourRgb)
+                    colourValid = true
+                }
+                val v = when (sensor) {
+                    SimSensor.COLOUR_R -> colourRgb[0]
+                    SimSensor.COLOUR_G -> colourRgb[1]
+                    SimSensor.COLOUR_B -> colourRgb[2]
+                    else -> (colourRgb[0] + colourRgb[1] + colourRgb[2]) / 3
+                }
+                (v + if (n) gauss() * 2 else 0.0).toInt().coerceIn(0, 255)
+            }
+            else -> 0
+        }
+    }
+
+    override fun irSend(senderId: Int, led: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
+        if (irOutCount == IR_CAP) { irDropped++; return }
+        val k = irOutCount++
+        irOutSender[k] = senderId; irOutLed[k] = led; irOutPower[k] = power.coerceIn(0, 100)
+        irOutLen[k] = len.coerceIn(0, 8); irOutLo[k] = payloadLo; irOutHi[k] = payloadHi
+    }
+
+    /** Queues an IR reception for the start of the next step (called by SimWorld, serially). */
+    fun irHeard(side: Int, sender: Int, led: Int, power: Int, len: Int, lo: Int, hi: Int) {
+        if (irInCount == IR_CAP) { irDropped++; return }
+        val o = irInCount++ * 7
+        irIn[o] = side; irIn[o + 1] = sender; irIn[o + 2] = led; irIn[o + 3] = power
+        irIn[o + 4] = len; irIn[o + 5] = lo; irIn[o + 6] = hi
+    }
+
+    /** Moved by a collision (not by its wheels). */
+    fun shove(dx: Double, dy: Double) { x += dx; y += dy; spotsValid = false; colourValid = false }
+
+    /** The robot's body as an oriented box. */
+    fun body(out: Obb) = out.set(x, y, theta, params.lengthM / 2, params.widthM / 2)
+
+    /**
+     * An approximately standard normal sample (sum of four 16-bit uniforms, Irwin-Hall): one call to the
+     * generator, no table to miss in the cache; good to +-3.5 sigma, plenty for sensor noise.
+     */
+    private fun gauss(): Double {
+        val r = sensorRng.nextLong()
+        val sum = (r and 0xFFFF) + ((r ushr 16) and 0xFFFF) + ((r ushr 32) and 0xFFFF) + (r ushr 48)
+        return (sum - 131070.0) * IRWIN_HALL_SCALE
+    }
+
+    companion object {
+        const val IR_CAP = 32
+        const val IDLE_TX_STEPS = 8
+        /** 1 / standard deviation of a sum of four uniforms on 0..65535. */
+        private val IRWIN_HALL_SCALE = 1.0 / (65536.0 * kotlin.math.sqrt(4.0 / 12.0))
+        const val G = 9.80665
+
+        fun edgeIndex(u: Double, pair: Double, black: Double): Long {
+            val k = floor(u / pair)
+            val frac = u - k * pair
+            return k.toLong() * 2 + if (frac >= black) 1 else 0
+        }
+
+        fun edgePos(n: Long, pair: Double, black: Double): Double =
+            Math.floorDiv(n, 2L) * pair + if (Math.floorMod(n, 2L) == 1L) black else 0.0
+    }
+}
+
+/** Which random effects are on. Sensor noise is deterministic from the seed; slip is off by default. */
+public data class NoiseSettings(
+    val sensorNoise: Boolean = true,
+    /** Up to this fraction of each wheel's travel is lost to slip (random per step), 0 = no slip. */
+    val wheelSlip: Double = 0.0,
+)

@@ -1,0 +1,90 @@
+package org.pocketbot.emulator.bench
+
+import org.pocketbot.emulator.Emulator
+import org.pocketbot.emulator.EmulatorConfig
+import org.pocketbot.emulator.world.Pose
+import org.pocketbot.emulator.world.Tape
+import org.pocketbot.emulator.world.World
+import org.pocketbot.emulator.world.Worlds
+import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.LineFollow
+import org.pocketbot.protocol.Slip
+import kotlin.math.abs
+import kotlin.math.ceil
+import kotlin.math.hypot
+import kotlin.math.sqrt
+import kotlin.time.Duration.Companion.seconds
+
+/**
+ * `make bench-emulator`: how fast the emulator runs fleets of line-following robots on the round track.
+ * Prints `emulator robots=<N> realtime_factor=<X>` per fleet size on stdout (details on stderr).
+ * The fleet shares a floor of round tracks (thesis A.3) laid side by side, three robots per track.
+ * Args: fleet sizes (default 1 10 100 1000).
+ */
+public fun main(args: Array<String>) {
+    val sizes = args.mapNotNull { it.toIntOrNull() }.ifEmpty { listOf(1, 10, 100, 1000) }
+    // Warm-up: let the JIT compile the firmware and the emulator before anything is measured.
+    run(10, measureS = 40, warmS = 1)
+    run(100, measureS = 2, warmS = 1)
+    for (n in sizes) {
+        val result = run(n)
+        println("emulator robots=$n realtime_factor=${"%.2f".format(result.factor)}")
+        System.out.flush()
+        System.err.println(
+            "  robots=$n simulated=${result.simulatedS}s wall=${"%.2f".format(result.wallS)}s " +
+                "on_line=${result.onLine}/$n threads=${result.threads} " +
+                "cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)} loadavg=${loadAverage()}",
+        )
+    }
+}
+
+private fun loadAverage(): String =
+    runCatching { java.io.File("/proc/loadavg").readText().split(' ').take(3).joinToString(",") }.getOrDefault("?")
+
+private class Result(val factor: Double, val simulatedS: Int, val wallS: Double, val onLine: Int, val threads: Int, val cpuUsPerRobotMs: Double)
+
+private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
+    val round = Worlds.load("round")
+    val track = round.tapes.single() as Tape.Arc
+    val tracks = ceil(n / 3.0).toInt()
+    val cols = ceil(sqrt(tracks.toDouble())).toInt()
+    val rows = ceil(tracks.toDouble() / cols).toInt()
+    val tile = round.widthM
+    val world = World(
+        name = "round-x$tracks", widthM = tile * cols, heightM = tile * rows, ambientAdc = round.ambientAdc,
+        tapes = List(tracks) { k ->
+            track.copy(center = track.center.copy(x = track.center.x + tile * (k % cols), y = track.center.y + tile * (k / cols)))
+        },
+    )
+    val config = EmulatorConfig(seed = 42).let { c ->
+        System.getProperty("pocketbot.bench.threads")?.toIntOrNull()?.let { c.copy(threads = it) } ?: c
+    }
+    Emulator(world, config).use { emu ->
+        val start = LineFollow(1, 0, 0f)
+        val frame = Slip.encode(Frames.encode(start, 0))
+        for (i in 0 until n) {
+            val k = i / 3
+            val s = round.starts[i % 3]
+            val pose = Pose(s.x + tile * (k % cols), s.y + tile * (k / cols), s.headingDeg)
+            val r = emu.addRobot(pose = pose)
+            r.hostSendRaw(frame)
+        }
+        val warm = warmS ?: if (n >= 1000) 1 else 2
+        emu.runFor(warm.seconds)
+        val simS = measureS ?: System.getProperty("pocketbot.bench.seconds")?.toIntOrNull() ?: when { n <= 1 -> 30; n <= 10 -> 20; n <= 100 -> 5; else -> 3 }
+        val os = java.lang.management.ManagementFactory.getOperatingSystemMXBean() as com.sun.management.OperatingSystemMXBean
+        val cpu0 = os.processCpuTime
+        val t0 = System.nanoTime()
+        emu.runFor(simS.seconds)
+        val wall = (System.nanoTime() - t0) / 1e9
+        val cpuUs = (os.processCpuTime - cpu0) / 1e3
+        var onLine = 0
+        for ((i, r) in emu.robots.withIndex()) {
+            val k = i / 3
+            val cx = track.center.x + tile * (k % cols); val cy = track.center.y + tile * (k / cols)
+            val p = r.truePose
+            if (abs(hypot(p.x - cx, p.y - cy) - track.radiusM) < 0.01 && r.trueWheelDistances.leftM > 0.2) onLine++
+        }
+        return Result(simS / wall, simS, wall, onLine, config.threads, cpuUs / (n * simS * 1000.0))
+    }
+}

@@ -1,0 +1,75 @@
+package org.pocketbot.emulator.firmware
+
+import com.dylibso.chicory.runtime.Instance
+import com.dylibso.chicory.runtime.Machine
+import com.dylibso.chicory.wasm.Parser
+import com.dylibso.chicory.wasm.WasmModule
+import java.nio.file.Files
+import java.nio.file.Path
+import java.util.function.Function
+
+/**
+ * A firmware build ready to instantiate: the parsed WebAssembly module and how to run it.
+ * Every robot gets its own [FirmwareInstance] (own linear memory, own globals) from one image.
+ */
+public class FirmwareImage internal constructor(
+    internal val module: WasmModule,
+    internal val machineFactory: Function<Instance, Machine>?,
+    /** Where it came from, for messages. */
+    public val origin: String,
+) {
+    public companion object {
+        private const val COMPILED_CLASS = "org.pocketbot.emulator.firmware.FirmwareModule"
+
+        /**
+         * The firmware compiled to JVM bytecode at build time (chicory-compiler-maven-plugin, from
+         * firmware/build/wasm/pocketbot.wasm). Throws [IllegalStateException] when the emulator was built
+         * without the firmware (run `make -C firmware wasm`, then rebuild the emulator).
+         */
+        public fun compiled(): FirmwareImage {
+            val cls = try {
+                Class.forName(COMPILED_CLASS)
+            } catch (e: ClassNotFoundException) {
+                throw IllegalStateException(
+                    "the emulator was built without the firmware: run `make -C firmware wasm`, then rebuild the emulator", e,
+                )
+            }
+            warnIfHugeMethodsStayInterpreted()
+            val module = cls.getMethod("load").invoke(null) as WasmModule
+            val create = cls.getMethod("create", Instance::class.java)
+            return FirmwareImage(module, Function { instance -> create.invoke(null, instance) as Machine }, "compiled:$COMPILED_CLASS")
+        }
+
+        @Volatile private var warned = false
+
+        /**
+         * HotSpot never JIT-compiles a method over 8000 bytecode bytes unless -XX:-DontCompileHugeMethods is
+         * given; a large firmware function (Chicory makes one JVM method per wasm function) then runs in the
+         * bytecode interpreter, several times slower. The emulator's own launchers pass the flag.
+         */
+        private fun warnIfHugeMethodsStayInterpreted() {
+            if (warned) return
+            warned = true
+            val on = runCatching {
+                java.lang.management.ManagementFactory.getPlatformMXBean(com.sun.management.HotSpotDiagnosticMXBean::class.java)
+                    .getVMOption("DontCompileHugeMethods").value == "true"
+            }.getOrDefault(false)
+            if (on) {
+                System.getLogger("org.pocketbot.emulator").log(
+                    System.Logger.Level.WARNING,
+                    "JVM started without -XX:-DontCompileHugeMethods: large firmware functions stay interpreted (slower emulation)",
+                )
+            }
+        }
+
+        /** True when the build-time compiled firmware is on the class path. */
+        public fun compiledAvailable(): Boolean =
+            runCatching { Class.forName(COMPILED_CLASS) }.isSuccess
+
+        /** A .wasm file run by Chicory's interpreter (about 20x slower than [compiled]): for other builds and tests. */
+        public fun interpreted(wasm: ByteArray, origin: String = "wasm bytes"): FirmwareImage =
+            FirmwareImage(Parser.parse(wasm), null, origin)
+
+        public fun interpreted(path: Path): FirmwareImage = interpreted(Files.readAllBytes(path), path.toString())
+    }
+}

@@ -1,0 +1,117 @@
+package org.pocketbot.emulator.firmware
+
+import com.dylibso.chicory.runtime.ByteArrayMemory
+import com.dylibso.chicory.runtime.ExportFunction
+import com.dylibso.chicory.runtime.HostFunction
+import com.dylibso.chicory.runtime.ImportValues
+import com.dylibso.chicory.runtime.Instance
+import com.dylibso.chicory.runtime.Memory
+import com.dylibso.chicory.wasm.types.FunctionType
+import com.dylibso.chicory.wasm.types.ValType
+
+/** What the firmware imports (module "env" of firmware/hal/sim/sim_abi.h), answered by the simulated robot. */
+public interface FirmwareHost {
+    /** Line sensor detector (0..3) read now with the emitters in the bit mask lit; 0..4095. */
+    public fun lineAdc(detector: Int, emitters: Int): Int
+
+    /** One of the [SimSensor] values, in its physical unit. */
+    public fun sensorRead(sensor: Int): Int
+
+    /** The firmware sends an IR message now. */
+    public fun irSend(senderId: Int, led: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int)
+}
+
+/** sensor_read ids of sim_abi.h. */
+public object SimSensor {
+    public const val BATTERY_MV: Int = 0
+    public const val CURRENT_MA: Int = 1
+    public const val MCU_TEMP_DC: Int = 2
+    public const val ACCEL_X_MG: Int = 3
+    public const val ACCEL_Y_MG: Int = 4
+    public const val ACCEL_Z_MG: Int = 5
+    public const val COLOUR_R: Int = 6
+    public const val COLOUR_G: Int = 7
+    public const val COLOUR_B: Int = 8
+    public const val COLOUR_CLEAR: Int = 9
+}
+
+/**
+ * One robot's firmware: a Chicory instance with its own linear memory, and typed calls to the exports of
+ * firmware/hal/sim/sim_abi.h. Not thread-safe: one thread at a time drives it.
+ */
+public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
+    private val fastMemory = System.getProperty("pocketbot.emulator.memory", "array") == "array"
+
+    private val instance: Instance
+    private val init: ExportFunction
+    private val advance: ExportFunction
+    private val encoderEdge: ExportFunction
+    private val uartRx: ExportFunction
+    private val uartTxTake: ExportFunction
+    private val irRx: ExportFunction
+
+    /** The instance's linear memory (little-endian). */
+    public val memory: Memory
+
+    /** Addresses of sim_outputs_t, robot_state and settings in [memory]. */
+    public val outputsAddress: Int
+    public val stateAddress: Int
+    public val settingsAddress: Int
+    public val txBufferAddress: Int
+
+    init {
+        val i32 = ValType.I32
+        val i64 = ValType.I64
+        val imports = ImportValues.builder()
+            .addFunction(
+                HostFunction("env", "line_adc", FunctionType.of(listOf(i32, i32), listOf(i32))) { _, args ->
+                    longArrayOf(host.lineAdc(args[0].toInt(), args[1].toInt()).toLong())
+                },
+                HostFunction("env", "sensor_read", FunctionType.of(listOf(i32), listOf(i32))) { _, args ->
+                    longArrayOf(host.sensorRead(args[0].toInt()).toLong())
+                },
+                HostFunction("env", "ir_send", FunctionType.of(listOf(i32, i32, i32, i32, i32, i32), listOf())) { _, args ->
+                    host.irSend(args[0].toInt(), args[1].toInt(), args[2].toInt(), args[3].toInt(), args[4].toInt(), args[5].toInt())
+                    null
+                },
+            )
+            .build()
+        val builder = Instance.builder(image.module).withImportValues(imports)
+            .withMemoryFactory { limits -> if (fastMemory) ByteArrayMemory(limits) else com.dylibso.chicory.runtime.ByteBufferMemory(limits) }
+        image.machineFactory?.let { builder.withMachineFactory(it) }
+        instance = builder.build()
+        memory = instance.memory()
+        init = instance.export("sim_init")
+        advance = instance.export("sim_advance")
+        encoderEdge = instance.export("sim_encoder_edge")
+        uartRx = instance.export("sim_uart_rx")
+        uartTxTake = instance.export("sim_uart_tx_take")
+        irRx = instance.export("sim_ir_rx")
+        outputsAddress = instance.export("sim_outputs").apply()[0].toInt()
+        stateAddress = instance.export("sim_state").apply()[0].toInt()
+        settingsAddress = instance.export("sim_settings").apply()[0].toInt()
+        txBufferAddress = instance.export("sim_uart_tx_buffer").apply()[0].toInt()
+    }
+
+    public fun init(robotId: Int) { init.apply(robotId.toLong()) }
+
+    public fun advance(nowTicks: Long) { advance.apply(nowTicks) }
+
+    public fun encoderEdge(wheel: Int, ticks: Long) { encoderEdge.apply(wheel.toLong(), ticks) }
+
+    public fun uartRx(byte: Int) { uartRx.apply(byte.toLong()) }
+
+    /** Takes up to [max] bytes queued for the host; they are at [txBufferAddress]. */
+    public fun uartTxTake(max: Int): Int = uartTxTake.apply(max.toLong())[0].toInt()
+
+    public fun irRx(side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
+        irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong())
+    }
+
+    public fun pwmLeft(): Int = memory.readShort(outputsAddress).toInt()
+    public fun pwmRight(): Int = memory.readShort(outputsAddress + 2).toInt()
+    public fun led(): Int = memory.read(outputsAddress + 4).toInt() and 0xff
+    public fun lineEmitters(): Int = memory.read(outputsAddress + 5).toInt() and 0xff
+
+    public fun readBytes(address: Int, length: Int): ByteArray = memory.readBytes(address, length)
+}

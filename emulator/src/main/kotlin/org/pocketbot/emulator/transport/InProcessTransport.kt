@@ -1,0 +1,84 @@
+package org.pocketbot.emulator.transport
+
+import kotlinx.coroutines.channels.Channel
+import kotlinx.coroutines.channels.ReceiveChannel
+import kotlinx.coroutines.flow.Flow
+import kotlinx.coroutines.flow.flow
+import org.pocketbot.emulator.link.LinkConnection
+import org.pocketbot.emulator.link.RobotLink
+import org.pocketbot.protocol.Slip
+import org.pocketbot.protocol.SlipDecoder
+import org.pocketbot.sdk.transport.Discoverer
+import org.pocketbot.sdk.transport.RobotDevice
+import org.pocketbot.sdk.transport.Transport
+import org.pocketbot.sdk.transport.TransportLostException
+
+/**
+ * A [Transport] to a robot of an emulator running in this JVM: frames are SLIP-encoded into the robot's
+ * simulated serial link (baud rate, latency, faults) and decoded out of it, exactly as over TCP or Bluetooth,
+ * without sockets. Opening a robot that already has a host takes it over (the older transport is lost).
+ */
+public class InProcessTransport internal constructor(
+    private val link: RobotLink,
+    override val address: String,
+) : Transport, LinkConnection {
+    private val frames = Channel<ByteArray>(Channel.UNLIMITED)
+    private val decoder = SlipDecoder()
+    @Volatile private var closed = false
+
+    /** SLIP frames the decoder dropped (corrupted framing) on the way from the robot. */
+    @Volatile public var framingErrors: Int = 0
+        private set
+
+    override val incoming: ReceiveChannel<ByteArray> get() = frames
+
+    init {
+        try {
+            link.attach(this)
+        } catch (e: IllegalStateException) {
+            throw TransportLostException("$address: ${e.message}", e)
+        }
+    }
+
+    override suspend fun send(frame: ByteArray) {
+        if (closed) throw TransportLostException("$address: transport is closed")
+        link.hostSend(Slip.encode(frame))
+    }
+
+    override fun close() {
+        if (closed) return
+        closed = true
+        link.detach(this)
+        frames.close()
+    }
+
+    // Called on the emulator's stepping thread.
+    override fun onBytes(bytes: ByteArray) {
+        if (closed) return
+        synchronized(decoder) {
+            decoder.feed(bytes, onError = { framingErrors++ }) { frames.trySend(it) }
+        }
+    }
+
+    override fun onLinkLost(reason: String) {
+        if (closed) return
+        closed = true
+        link.detach(this)
+        frames.close(TransportLostException("$address: $reason"))
+    }
+}
+
+/** A robot of an embedded emulator, as a [Discoverer] finds it. */
+public class InProcessDevice internal constructor(
+    override val name: String,
+    override val address: String,
+    private val link: RobotLink,
+) : RobotDevice {
+    override suspend fun open(): Transport = InProcessTransport(link, address)
+    override fun toString(): String = "$name ($address)"
+}
+
+/** Finds the robots of an embedded emulator: each robot present when [discover] is collected. */
+public class InProcessDiscoverer internal constructor(private val devices: () -> List<RobotDevice>) : Discoverer {
+    override fun discover(): Flow<RobotDevice> = flow { for (d in devices()) emit(d) }
+}

@@ -1,0 +1,94 @@
+/*
+ * A tiny stand-in for the firmware, used only by the emulator's own wiring tests: it implements the
+ * ABI of firmware/hal/sim/sim_abi.h with trivial behaviour (echo on the link, count encoder edges,
+ * beacon over IR, drive both motors at a fixed PWM, read the line sensor), so the Chicory wiring can
+ * be tested without the real firmware. Build: emulator/src/test/c/build.sh (clang + wasm-ld).
+ */
+#include <stdint.h>
+
+#define EXPORT(name) __attribute__((export_name(#name)))
+#define IMPORT(name) __attribute__((import_module("env"), import_name(#name)))
+
+IMPORT(line_adc) int32_t line_adc(int32_t detector, int32_t emitters);
+IMPORT(sensor_read) int32_t sensor_read(int32_t sensor);
+IMPORT(ir_send) void ir_send(int32_t id, int32_t led, int32_t power, int32_t len, int32_t lo, int32_t hi);
+
+typedef struct __attribute__((packed)) {
+    int16_t pwm_left, pwm_right;
+    uint8_t led, line_emitters;
+} outputs_t;
+
+/* The stand-in's "robot_state": what the wiring tests read back. */
+typedef struct __attribute__((packed)) {
+    int64_t now;
+    int64_t last_edge[2];
+    int32_t edges[2];
+    int32_t ir_heard;
+    int32_t ir_last_sender, ir_last_side, ir_last_led, ir_last_power;
+    int32_t adc[4];
+    int32_t battery_mv;
+    int32_t id;
+    int32_t rx_count;
+} state_t;
+
+static outputs_t outputs;
+static state_t state;
+static uint8_t tx[256];
+static uint8_t txq[256];
+static uint32_t txq_head, txq_tail;
+static int64_t next_tick;
+static int64_t next_beacon;
+static uint8_t settings[4] = {1, 2, 3, 4};
+
+EXPORT(sim_init) void sim_init(int32_t robot_id) {
+    state.id = robot_id;
+    outputs.pwm_left = 500;
+    outputs.pwm_right = 500;
+    next_tick = 32000;
+    next_beacon = 32000 * 40;
+}
+
+EXPORT(sim_advance) void sim_advance(int64_t now) {
+    while (next_tick <= now) {
+        for (int d = 0; d < 4; d++) state.adc[d] = line_adc(d, 3 << d);
+        state.battery_mv = sensor_read(0);
+        if (next_tick >= next_beacon) {
+            ir_send(state.id, 0, 100, 2, 0x1234, 0);
+            next_beacon += 32000 * 40;
+        }
+        next_tick += 32000;
+    }
+    state.now = now;
+}
+
+EXPORT(sim_encoder_edge) void sim_encoder_edge(int32_t wheel, int64_t ticks) {
+    state.edges[wheel & 1]++;
+    state.last_edge[wheel & 1] = ticks;
+}
+
+EXPORT(sim_uart_rx) void sim_uart_rx(int32_t byte) {
+    state.rx_count++;
+    txq[txq_head++ & 255] = (uint8_t)byte;
+}
+
+EXPORT(sim_uart_tx_take) int32_t sim_uart_tx_take(int32_t max) {
+    int32_t n = 0;
+    while (n < max && txq_tail != txq_head) tx[n++] = txq[txq_tail++ & 255];
+    return n;
+}
+
+EXPORT(sim_uart_tx_buffer) int32_t sim_uart_tx_buffer(void) { return (int32_t)(uintptr_t)tx; }
+
+EXPORT(sim_ir_rx) void sim_ir_rx(int32_t side, int32_t sender, int32_t led, int32_t power, int32_t len,
+                                 int32_t lo, int32_t hi) {
+    (void)len; (void)lo; (void)hi;
+    state.ir_heard++;
+    state.ir_last_sender = sender;
+    state.ir_last_side = side;
+    state.ir_last_led = led;
+    state.ir_last_power = power;
+}
+
+EXPORT(sim_outputs) int32_t sim_outputs(void) { return (int32_t)(uintptr_t)&outputs; }
+EXPORT(sim_state) int32_t sim_state(void) { return (int32_t)(uintptr_t)&state; }
+EXPORT(sim_settings) int32_t sim_settings(void) { return (int32_t)(uintptr_t)settings; }
