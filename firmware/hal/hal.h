@@ -20,6 +20,14 @@
 #define HAL_FLASH
 #endif
 
+/** Keeps a large function out of its callers on targets that need it: under the emulator each WebAssembly
+ *  function becomes one JVM method, and HotSpot never compiles a method over 8000 bytecode bytes. */
+#ifdef __wasm__
+#define HAL_NOINLINE_SIM __attribute__((noinline))
+#else
+#define HAL_NOINLINE_SIM
+#endif
+
 /* ---- board ---------------------------------------------------------------------------------- */
 
 /** Initializes clocks, pins and every peripheral; interrupts stay disabled until hal_irq_enable(). */

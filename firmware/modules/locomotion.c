@@ -283,7 +283,7 @@ void locomotion_failsafe(void)
 }
 
 /* Per-wheel speed PIDs towards target[] (teleoperation and line following). */
-static void wheel_step(void)
+HAL_NOINLINE_SIM static void wheel_step(void)
 {
     int32_t lim = pwm_limit_q16();
     int16_t duty[2];
@@ -349,7 +349,7 @@ static void finish(bool completed, int32_t s_done, int32_t v_now)
 }
 
 /* One step of the two chained controllers, in integers. */
-static void movement_step(void)
+HAL_NOINLINE_SIM static void movement_step(void)
 {
     if (!act.running) {
         if (q_count == 0) {

@@ -34,32 +34,9 @@ public class FirmwareImage internal constructor(
                     "the emulator was built without the firmware: run `make -C firmware wasm`, then rebuild the emulator", e,
                 )
             }
-            warnIfHugeMethodsStayInterpreted()
             val module = cls.getMethod("load").invoke(null) as WasmModule
             val create = cls.getMethod("create", Instance::class.java)
             return FirmwareImage(module, Function { instance -> create.invoke(null, instance) as Machine }, "compiled:$COMPILED_CLASS")
-        }
-
-        @Volatile private var warned = false
-
-        /**
-         * HotSpot never JIT-compiles a method over 8000 bytecode bytes unless -XX:-DontCompileHugeMethods is
-         * given; a large firmware function (Chicory makes one JVM method per wasm function) then runs in the
-         * bytecode interpreter, several times slower. The emulator's own launchers pass the flag.
-         */
-        private fun warnIfHugeMethodsStayInterpreted() {
-            if (warned) return
-            warned = true
-            val on = runCatching {
-                java.lang.management.ManagementFactory.getPlatformMXBean(com.sun.management.HotSpotDiagnosticMXBean::class.java)
-                    .getVMOption("DontCompileHugeMethods").value == "true"
-            }.getOrDefault(false)
-            if (on) {
-                System.getLogger("org.pocketbot.emulator").log(
-                    System.Logger.Level.WARNING,
-                    "JVM started without -XX:-DontCompileHugeMethods: large firmware functions stay interpreted (slower emulation)",
-                )
-            }
         }
 
         /** True when the build-time compiled firmware is on the class path. */
