@@ -1,0 +1,125 @@
+package org.pocketbot.sdk
+
+import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.Job
+import kotlinx.coroutines.SupervisorJob
+import kotlinx.coroutines.async
+import kotlinx.coroutines.awaitAll
+import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.flow.MutableStateFlow
+import kotlinx.coroutines.flow.StateFlow
+import kotlinx.coroutines.flow.asStateFlow
+import kotlinx.coroutines.flow.take
+import kotlinx.coroutines.flow.toList
+import kotlinx.coroutines.flow.update
+import kotlinx.coroutines.launch
+import kotlinx.coroutines.withTimeoutOrNull
+import org.pocketbot.sdk.transport.Discoverer
+import org.pocketbot.sdk.transport.RobotDevice
+import kotlin.time.Duration
+import kotlin.time.Duration.Companion.seconds
+
+/**
+ * Many robots under one scope (thesis 5: "handle simultaneous connections to many robots"): discover and connect
+ * them in parallel, start movements on several at the same moment (thesis A.2), close them all.
+ *
+ * ```
+ * Fleet().use { fleet ->
+ *     val (a, b) = fleet.discoverAndConnect(discoverer, count = 2)
+ *     fleet.enqueueTogether(mapOf(a to Movement.Straight(0.05, 0.1), b to Movement.Straight(0.05, 0.1)))
+ *     fleet.awaitIdle()
+ * }
+ * ```
+ * Closing the fleet (or cancelling [scope]'s job) closes every robot in it.
+ */
+public class Fleet(scope: CoroutineScope? = null, private val options: RobotOptions = RobotOptions()) : AutoCloseable {
+    private val job = SupervisorJob(scope?.coroutineContext?.get(Job))
+    private val fleetScope = CoroutineScope((scope?.coroutineContext ?: Dispatchers.Default) + job)
+    private val _robots = MutableStateFlow<List<Robot>>(emptyList())
+
+    /** The connected robots, in the order they joined. */
+    public val robots: StateFlow<List<Robot>> = _robots.asStateFlow()
+
+    /** Connects [device] (see [RobotDevice.connect]) into this fleet. */
+    public suspend fun connect(device: RobotDevice, options: RobotOptions = this.options): Robot {
+        val robot = device.connect(fleetScope, options)
+        _robots.update { it + robot }
+        return robot
+    }
+
+    /** Connects all [devices] in parallel; fails (closing those that did connect) if any fails. */
+    public suspend fun connectAll(devices: List<RobotDevice>): List<Robot> = coroutineScope {
+        val attempts = devices.map { d -> async { runCatching { connect(d) } } }.awaitAll()
+        val failure = attempts.firstOrNull { it.isFailure }?.exceptionOrNull()
+        if (failure != null) {
+            attempts.mapNotNull { it.getOrNull() }.forEach { remove(it) }
+            throw failure
+        }
+        attempts.map { it.getOrThrow() }
+    }
+
+    /**
+     * Discovers robots with [discoverer] (up to [count], or all it finds within [timeout]) and connects them all
+     * in parallel.
+     */
+    public suspend fun discoverAndConnect(discoverer: Discoverer, count: Int? = null, timeout: Duration = 10.seconds): List<Robot> {
+        val found = ArrayList<RobotDevice>()
+        withTimeoutOrNull(timeout) {
+            val flow = discoverer.discover()
+            (if (count != null) flow.take(count) else flow).toList(found)
+        }
+        return connectAll(found)
+    }
+
+    /**
+     * Queues one movement on each robot so that they start at the same moment: each robot's command is prepared and
+     * queued behind its earlier commands first, then all frames go out back to back. Suspends until every robot
+     * acknowledged; returns the handles.
+     */
+    public suspend fun enqueueTogether(movements: Map<Robot, Movement>): Map<Robot, MovementHandle> = coroutineScope {
+        val ready = movements.keys.associateWith { CompletableDeferred<Unit>() }
+        val go = CompletableDeferred<Unit>()
+        val launched = movements.map { (robot, movement) ->
+            robot to async {
+                try {
+                    robot.locomotion.enqueue(movement) {
+                        ready.getValue(robot).complete(Unit)
+                        go.await()
+                    }
+                } finally {
+                    ready.getValue(robot).complete(Unit) // a robot that fails early must not hold the others
+                }
+            }
+        }
+        launch {
+            ready.values.awaitAll()
+            go.complete(Unit)
+        }
+        launched.associate { (robot, d) -> robot to d.await() }
+    }
+
+    /** Suspends until every robot finished the movements this host queued. */
+    public suspend fun awaitIdle() {
+        coroutineScope { _robots.value.map { async { it.locomotion.awaitIdle() } }.awaitAll() }
+    }
+
+    /** Stops every robot (clears the queues). */
+    public suspend fun stopAll(immediate: Boolean = false) {
+        coroutineScope { _robots.value.map { async { it.locomotion.stop(immediate) } }.awaitAll() }
+    }
+
+    /** Closes [robot] and removes it from the fleet. */
+    public fun remove(robot: Robot) {
+        robot.close()
+        _robots.update { it - robot }
+    }
+
+    /** Closes every robot and the fleet's scope; idempotent. */
+    override fun close() {
+        _robots.value.forEach { it.close() }
+        _robots.value = emptyList()
+        job.cancel()
+    }
+}

@@ -1,0 +1,109 @@
+package org.pocketbot.sdk
+
+import kotlinx.coroutines.channels.BufferOverflow
+import kotlinx.coroutines.flow.MutableSharedFlow
+import kotlinx.coroutines.flow.MutableStateFlow
+import kotlinx.coroutines.flow.SharedFlow
+import kotlinx.coroutines.flow.StateFlow
+import kotlinx.coroutines.flow.asSharedFlow
+import kotlinx.coroutines.flow.asStateFlow
+import org.pocketbot.protocol.DistanceClass
+import org.pocketbot.protocol.IrLed
+import org.pocketbot.protocol.IrReceived
+import org.pocketbot.protocol.IrSend
+import org.pocketbot.protocol.ProximitySide
+import org.pocketbot.protocol.Side
+import org.pocketbot.protocol.StateProximity
+
+/**
+ * Another robot seen by one of our IR receivers.
+ *
+ * @property robotId the other robot's id (its settings.identity.robot_id).
+ * @property side which of our receivers heard it.
+ * @property orientation which LED of the other robot we saw: [IrLed.REAR] means it drives away from us, [IrLed.FRONT]
+ *   that it faces us. Null for a code this SDK does not know.
+ * @property distance rough distance class, from the lowest IR power it was heard at.
+ * @property timeMs robot time of the state that reported it (ms).
+ */
+public data class Encounter(
+    public val robotId: Int,
+    public val side: Side,
+    public val orientation: IrLed?,
+    public val distance: DistanceClass?,
+    public val timeMs: Long,
+)
+
+/**
+ * An IR message another robot sent with [Proximity.send].
+ *
+ * @property powerPercent the sender's transmit power.
+ */
+public class IrMessage(
+    public val senderId: Int,
+    public val side: Side?,
+    public val senderLed: IrLed?,
+    public val powerPercent: Int,
+    payload: ByteArray,
+) {
+    private val bytes = payload.copyOf()
+
+    /** The payload, 0..8 bytes (a copy). */
+    public val payload: ByteArray get() = bytes.copyOf()
+
+    override fun toString(): String = "IrMessage(from $senderId on $side, led $senderLed, $powerPercent %, ${bytes.size} bytes)"
+}
+
+/**
+ * IR proximity: robots announce themselves with IR beacons (id, LED, power) and detect obstacles by their own
+ * reflection. [encounters] reports when a receiver starts hearing a robot or what it hears changes; [messages]
+ * reports payloads sent by other robots.
+ */
+public class Proximity internal constructor(private val robot: Robot) {
+    private val _state = MutableStateFlow(StateProximity(ProximitySide(0, 0, 0, 0), ProximitySide(0, 0, 0, 0)))
+    private val _encounters = MutableSharedFlow<Encounter>(extraBufferCapacity = 64, onBufferOverflow = BufferOverflow.DROP_OLDEST)
+    private val _messages = MutableSharedFlow<IrMessage>(extraBufferCapacity = 64, onBufferOverflow = BufferOverflow.DROP_OLDEST)
+
+    /** What the front and rear receivers see (full state only). */
+    public val state: StateFlow<StateProximity> = _state.asStateFlow()
+
+    /** New or changed sightings of other robots. */
+    public val encounters: SharedFlow<Encounter> = _encounters.asSharedFlow()
+
+    /** Payloads received from other robots. */
+    public val messages: SharedFlow<IrMessage> = _messages.asSharedFlow()
+
+    /** True while the front receiver sees an obstacle by its own reflection. */
+    public val obstacleFront: Boolean get() = _state.value.front.flags and 1 != 0
+
+    /** True while the rear receiver sees an obstacle by its own reflection. */
+    public val obstacleRear: Boolean get() = _state.value.rear.flags and 1 != 0
+
+    /**
+     * Sends [payload] (at most 8 bytes) with the next IR beacons at [powerPercent] (1..100) to robots nearby;
+     * suspends until the robot accepted it.
+     */
+    public suspend fun send(payload: ByteArray, powerPercent: Int = 100) {
+        require(payload.size <= 8) { "an IR payload has at most 8 bytes, not ${payload.size}" }
+        require(powerPercent in 1..100) { "powerPercent $powerPercent is outside 1..100" }
+        robot.command(IrSend(powerPercent, payload.copyOf()))
+    }
+
+    internal fun update(s: StateProximity, timeMs: Long) {
+        val before = _state.value
+        _state.value = s
+        check(Side.FRONT, before.front, s.front, timeMs)
+        check(Side.REAR, before.rear, s.rear, timeMs)
+    }
+
+    private fun check(side: Side, before: ProximitySide, now: ProximitySide, timeMs: Long) {
+        val hears = now.flags and 2 != 0 && now.robotId != 0
+        if (!hears) return
+        val heard = before.flags and 2 != 0 && before.robotId != 0
+        if (heard && before.robotId == now.robotId && before.robotLed == now.robotLed && before.distance == now.distance) return
+        _encounters.tryEmit(Encounter(now.robotId, side, IrLed.fromCode(now.robotLed), DistanceClass.fromCode(now.distance), timeMs))
+    }
+
+    internal fun received(p: IrReceived) {
+        _messages.tryEmit(IrMessage(p.senderId, Side.fromCode(p.side), IrLed.fromCode(p.senderLed), p.power, p.data))
+    }
+}

@@ -1,0 +1,95 @@
+package org.pocketbot.sdk
+
+import kotlinx.coroutines.flow.MutableStateFlow
+import kotlinx.coroutines.flow.StateFlow
+import kotlinx.coroutines.flow.asStateFlow
+import org.pocketbot.protocol.Colour
+import org.pocketbot.protocol.StateAccel
+import org.pocketbot.protocol.StateColour
+import org.pocketbot.protocol.StateLine
+import org.pocketbot.protocol.StatePower
+import org.pocketbot.protocol.StateWheels
+
+/**
+ * The line sensor: 4 detectors x 5 emitters = 8 spots with ambient light suppression. Updated by full and reduced
+ * state packets (reduced ones carry position and flags only; `raw` then keeps its last full value).
+ */
+public class LineSensor internal constructor() {
+    private val _reading = MutableStateFlow(StateLine(List(8) { 0 }, 0, 0))
+
+    /** The last reading: `raw` per spot (adc), `position` -1000 far left .. 1000 far right (permille), `flags`. */
+    public val reading: StateFlow<StateLine> = _reading.asStateFlow()
+
+    /** Line position in permille, -1000 far left .. 1000 far right. */
+    public val positionPermille: Int get() = _reading.value.position
+
+    /** True while a spot sees the line. */
+    public val lineSeen: Boolean get() = _reading.value.flags and 1 != 0
+
+    /** True after the line was lost for longer than settings.line_follow.lost_timeout_ms. */
+    public val lineLost: Boolean get() = _reading.value.flags and 2 != 0
+
+    internal fun update(line: StateLine) {
+        _reading.value = line
+    }
+}
+
+/** The colour sensor under the robot (full state only). */
+public class ColourSensor internal constructor() {
+    private val _reading = MutableStateFlow(StateColour(0, 0, 0, 0, 0))
+
+    /** Red, green, blue and clear channels (0..255) and the classified colour code. */
+    public val reading: StateFlow<StateColour> = _reading.asStateFlow()
+
+    /** The classified surface colour, [Colour.UNKNOWN] for a code this SDK does not know. */
+    public val detected: Colour get() = Colour.fromCode(_reading.value.detected) ?: Colour.UNKNOWN
+
+    internal fun update(c: StateColour) {
+        _reading.value = c
+    }
+}
+
+/** The accelerometer (full state only): x forward, y left, z up, in mg. */
+public class Accelerometer internal constructor() {
+    private val _reading = MutableStateFlow(StateAccel(0, 0, 0))
+
+    /** The last acceleration, in mg (1 g = 1000 mg). */
+    public val reading: StateFlow<StateAccel> = _reading.asStateFlow()
+
+    internal fun update(a: StateAccel) {
+        _reading.value = a
+    }
+}
+
+/** Battery and MCU (full state only). */
+public class Power internal constructor() {
+    private val _reading = MutableStateFlow(StatePower(0, 0, 0))
+
+    /** Battery voltage (mV), current drawn (mA) and MCU temperature (0.1 degC). */
+    public val reading: StateFlow<StatePower> = _reading.asStateFlow()
+
+    /** Battery voltage in volts. */
+    public val batteryV: Double get() = _reading.value.batteryMv / 1000.0
+
+    internal fun update(p: StatePower) {
+        _reading.value = p
+    }
+}
+
+/** Measured wheel speeds (full and reduced state) and motor PWM (full state). */
+public class Motors internal constructor() {
+    private val _wheels = MutableStateFlow(StateWheels(0, 0, 0, 0))
+
+    /** Wheel speeds (mm/s) and motor duty (permille, -1000..1000). */
+    public val wheels: StateFlow<StateWheels> = _wheels.asStateFlow()
+
+    /** Left wheel speed in m/s. */
+    public val leftMps: Double get() = _wheels.value.speedLeftMmps / 1000.0
+
+    /** Right wheel speed in m/s. */
+    public val rightMps: Double get() = _wheels.value.speedRightMmps / 1000.0
+
+    internal fun update(w: StateWheels) {
+        _wheels.value = w
+    }
+}

@@ -1,0 +1,128 @@
+package org.pocketbot.sdk.it
+
+import kotlinx.coroutines.delay
+import kotlinx.coroutines.flow.filter
+import kotlinx.coroutines.flow.first
+import kotlinx.coroutines.flow.take
+import kotlinx.coroutines.flow.toList
+import kotlinx.coroutines.launch
+import org.junit.jupiter.api.Test
+import org.pocketbot.emulator.link.LinkSettings
+import org.pocketbot.protocol.ErrorCode
+import org.pocketbot.protocol.ProtocolInfo
+import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.SettingRefusedException
+import org.pocketbot.sdk.StateUpdate
+import org.pocketbot.sdk.connect
+import kotlin.test.assertContentEquals
+import kotlin.test.assertEquals
+import kotlin.test.assertFailsWith
+import kotlin.test.assertTrue
+import kotlin.time.Duration.Companion.milliseconds
+
+/** Handshake, state and settings reflection against the real firmware in the emulator. */
+class ConnectAndReflectIntegrationTest {
+    @Test
+    fun connectsAndLearnsIdentityAndSettings() = withEmulator { emu ->
+        val robot = connectAll(emu).single()
+        assertEquals(ConnectionState.Connected, robot.connection.value)
+        assertEquals(1, robot.identity.robotId)
+        assertEquals(ProtocolInfo.LAYOUT_HASH, robot.identity.layoutHash)
+        assertEquals(emu.handleOf(robot).name, robot.identity.name)
+        assertMirrors(robot, emu.handleOf(robot).settingsBytes())
+        robot.close()
+    }
+
+    @Test
+    fun fullAndReducedStateUpdatesFlowWithRobotTime() = withEmulator { emu ->
+        val robot = connectAll(emu).single()
+        robot.reflector.set(SyncMode.FULL, 20.milliseconds)
+        val full = robot.stateUpdates.filter { it.kind == StateUpdate.Kind.FULL }.take(10).toList()
+        val times = full.map { it.timeMs }
+        assertTrue(times.zipWithNext().all { (a, b) -> b > a }, "robot time must increase: $times")
+        // the first interval may still be on the old schedule
+        assertTrue(times.drop(1).zipWithNext().all { (a, b) -> b - a in 15..60 }, "about 20 ms apart: $times")
+
+        robot.reflector.set(SyncMode.REDUCED, 5.milliseconds)
+        val reduced = robot.stateUpdates.filter { it.kind == StateUpdate.Kind.REDUCED }.take(20).toList()
+        assertTrue(reduced.zipWithNext().all { (a, b) -> b.timeMs > a.timeMs })
+        assertTrue(robot.linkStats.value.reducedStates >= 20)
+        assertEquals(0, robot.linkStats.value.dropped)
+        assertEquals(2, emu.handleOf(robot).settingsBytes()[17].toInt(), "settings.sync.mode on the robot")
+        robot.close()
+    }
+
+    @Test
+    fun settingWriteIsAppliedOnTheRobotAndRefusalIsTyped() = withEmulator { emu ->
+        val robot = connectAll(emu).single()
+        val sim = emu.handleOf(robot)
+        robot.settings.linePid.kp.set(1.5f)
+        assertEquals(1.5f, robot.settings.linePid.kp.value)
+        val onRobot = sim.settingsBytes()
+        assertEquals(1.5f, Float.fromBits((onRobot[70].toInt() and 0xFF) or ((onRobot[71].toInt() and 0xFF) shl 8) or
+            ((onRobot[72].toInt() and 0xFF) shl 16) or ((onRobot[73].toInt() and 0xFF) shl 24)))
+
+        val e = assertFailsWith<SettingRefusedException> { robot.settings.geometry.wheelBaseM.set(2.0f) }
+        assertEquals(ErrorCode.SETTINGS_VALUE, e.code)
+        assertEquals(0.026f, robot.settings.geometry.wheelBaseM.value)
+        assertContentEquals(onRobot, sim.settingsBytes(), "a refused write must not change the robot")
+
+        robot.settings.identity.name.set("Hello")
+        assertEquals("Hello", sim.name)
+        assertEquals(robot.settings.values.value, robot.settings.readAll())
+        robot.close()
+    }
+
+    @Test
+    fun jsonExportImportAcrossTwoRobots() = withEmulator(robots = 2) { emu ->
+        val (a, b) = connectAll(emu)
+        a.settings.lineFollow.speedMps.set(0.3f)
+        a.settings.proximity.holdMs.set(500)
+        val written = b.settings.importJson(a.settings.exportJson())
+        assertTrue(written >= 2, "robot_id and name differ too: $written")
+        assertEquals(0.3f, b.settings.lineFollow.speedMps.value)
+        assertContentEquals(emu.handleOf(a).settingsBytes(), emu.handleOf(b).settingsBytes())
+        a.close(); b.close()
+    }
+
+    @Test
+    fun corruptionAndLossAreCountedAndNeverReachTheState() = withEmulator { emu ->
+        val robot = connectAll(emu).single()
+        val sim = emu.handleOf(robot)
+        robot.reflector.set(SyncMode.FULL, 10.milliseconds)
+        sim.link = LinkSettings(corruptionRate = 0.003, lossRate = 0.002)
+        var insane = 0
+        val watcher = launch {
+            robot.stateUpdates.collect { u ->
+                // A corrupted state that slipped through would show wild values somewhere.
+                if (u.state.power.batteryMv !in 2500..5000 || u.state.time.timeMs > 1_000_000) insane++
+            }
+        }
+        robot.settings.linePid.kd.set(0.003f) // commands still get through, retransmitted as needed
+        delay(2000)
+        watcher.cancel()
+        sim.link = LinkSettings()
+        val stats = robot.linkStats.value
+        assertTrue(stats.dropped > 0, "some frames must have been dropped: $stats")
+        assertTrue(stats.fullStates > 100, "states keep flowing: $stats")
+        assertEquals(0, insane, "a corrupted state was applied")
+        assertEquals(0.003f, robot.settings.linePid.kd.value)
+        robot.close()
+    }
+
+    @Test
+    fun secondConnectSkipsTheSettingsRead() = withEmulator { emu ->
+        val cache = org.pocketbot.sdk.InMemorySettingsCache()
+        val device = emu.discoverer().discover().first()
+        val t0 = System.nanoTime()
+        device.connect(this, itOptions().copy(settingsCache = cache)).close()
+        val first = System.nanoTime() - t0
+        val t1 = System.nanoTime()
+        val again = device.connect(this, itOptions().copy(settingsCache = cache))
+        val second = System.nanoTime() - t1
+        assertMirrors(again, emu.robots.single().settingsBytes())
+        assertTrue(second < first, "cached connect ($second ns) should beat the first ($first ns)")
+        again.close()
+    }
+}
