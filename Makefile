@@ -1,7 +1,7 @@
 # PocketBot top-level build: make drives the firmware (C) and Maven (every JVM module).
 #
 #   make test        everything CI runs: deps, protocol check, firmware tests, mvn verify
-#   make run         build what is needed, then run $(RUN_MAIN) (the emulator fleet demo)
+#   make run         build what is needed, then HelloRobot and the fleet demo ($(RUN_MAIN)) on the emulator
 #   make hello       run the HelloRobot example
 #   make emulator    run the emulator CLI, e.g. make emulator ARGS="--robots 3"
 #   make jvm         mvn install of the reactor (no tests), after the firmware wasm
@@ -18,10 +18,9 @@ JAVA      ?= java
 PYTHON    ?= python3
 ARGS      ?=
 
-RUN_MAIN            ?= org.pocketbot.examples.HelloRobotKt
+RUN_MAIN            ?= org.pocketbot.examples.FleetDemoKt
 HELLO_MAIN          ?= org.pocketbot.examples.HelloRobotKt
 EMULATOR_MAIN       ?= org.pocketbot.emulator.cli.MainKt
-# Placeholders until the benchmark mains exist (set by the emulator / SDK issues).
 BENCH_EMULATOR_MAIN ?= org.pocketbot.emulator.bench.EmulatorBenchKt
 BENCH_SDK_MAIN      ?= org.pocketbot.bench.SdkBenchKt
 # Jazzer: JAZZER_FUZZ=1 turns @FuzzTest from regression (seeds only) into real fuzzing; it fuzzes
@@ -75,6 +74,7 @@ $(RUN_STAMP): $(JVM_INPUTS) $(wildcard $(WASM))
 
 run: wasm
 	@$(MAKE) --no-print-directory $(RUN_STAMP)
+	$(JAVA) -cp "$(call cp_of,examples)" $(HELLO_MAIN)
 	$(JAVA) -cp "$(call cp_of,examples)" $(RUN_MAIN) $(ARGS)
 
 hello: wasm
