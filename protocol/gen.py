@@ -448,24 +448,45 @@ def kt_type(f):
     return f"List<{t}>" if f.count else t
 
 
-def kt_read(f):
+INT_PRIMS = {"u8", "i8", "u16", "i16", "i32"}  # Kotlin Int on the wire types: arrays of them are IntArray-backed
+
+
+def kt_at(off):
+    return f"at + {off}" if off else "at"
+
+
+def kt_read(f, s):
+    """A decode expression for field f of struct s, which starts at `at` in `b` (a packet's payload ends at `end`)."""
+    at = kt_at(f.offset)
     if f.is_bytes:
-        return "r.readBytes(r.remaining)"
+        return f"b.copyOfRange({at}, end)"
     if f.is_char:
-        return f"r.readText({f.count})"
-    one = f"{f.struct.kt_name}.decode(r)" if f.is_struct else f"r.read{f.base.upper()}()"
-    return f"List({f.count}) {{ {one} }}" if f.count else one
+        return f"b.text({at}, {f.count})"
+    if not f.count:
+        return f"{f.struct.kt_name}.decode(b, {at})" if f.is_struct else f"b.{f.base}({at})"
+    el = f"{at} + {f.elem_size} * it" if f.elem_size > 1 else f"{at} + it"
+    if f.is_struct:
+        return f"List({f.count}) {{ {f.struct.kt_name}.decode(b, {el}) }}"
+    if f.base in INT_PRIMS:
+        return f"IntArrayList(IntArray({f.count}) {{ b.{f.base}({el}) }})"
+    return f"List({f.count}) {{ b.{f.base}({el}) }}"
 
 
 def kt_write(f, expr):
+    at = kt_at(f.offset)
     if f.is_bytes:
-        return f"w.writeBytes({expr})"
+        return f"{expr}.copyInto(b, {at})"
     if f.is_char:
-        return f"w.writeText({expr}, {f.count})"
-    one = (lambda e: f"{e}.encodeTo(w)") if f.is_struct else (lambda e: f"w.write{f.base.upper()}({e})")
-    if f.count:
-        return f"require({expr}.size == {f.count}) {{ \"{f.name} needs {f.count} values\" }}; {expr}.forEach {{ {one('it')} }}"
-    return one(expr)
+        return f"b.putText({at}, {expr}, {f.count})"
+    put = f"put{f.base.upper()}" if f.is_prim else None
+    if not f.count:
+        return f"{expr}.encodeTo(b, {at})" if f.is_struct else f"b.{put}({at}, {expr})"
+    el = f"{at} + {f.elem_size} * i" if f.elem_size > 1 else f"{at} + i"
+    if f.is_prim and f.base in INT_PRIMS:
+        return (f"intsOf({expr}, {f.count}, \"{f.name}\").let {{ a -> for (i in 0 until {f.count}) b.{put}({el}, a[i]) }}")
+    one = f"{expr}[i].encodeTo(b, {el})" if f.is_struct else f"b.{put}({el}, {expr}[i])"
+    return (f"require({expr}.size == {f.count}) {{ \"{f.name} needs {f.count} values\" }}; "
+            f"for (i in 0 until {f.count}) {one}")
 
 
 def kt_class(s, packet=None):
@@ -488,15 +509,21 @@ def kt_class(s, packet=None):
         o.append(f"){parents} {{")
     if packet:
         o.append(f"    override val type: Int get() = {s.id}")
-    o.append("    internal fun encodeTo(w: ByteWriter) {")
+        tail = [f for f in s.fields if f.is_bytes]
+        size = f"{s.size} + {camel(tail[0].name)}.size" if tail else f"{s.size}"
+        o.append("    /** Encoded payload size in bytes. */")
+        o.append(f"    internal val payloadSize: Int get() = {size}")
+    if not s.fields:
+        o.append("    @Suppress(\"UNUSED_PARAMETER\") // no payload")
+    o.append("    internal fun encodeTo(b: ByteArray, at: Int) {")
     for f in s.fields:
         if f.length_of:
-            o.append(f"        w.writeU8({camel(f.length_of)}.size)")
+            o.append(f"        b.putU8({kt_at(f.offset)}, {camel(f.length_of)}.size)")
         else:
             o.append(f"        {kt_write(f, camel(f.name))}")
     o.append("    }")
     if packet:
-        o.append("    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()")
+        o.append("    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }")
     if has_bytes:
         names = [camel(f.name) for f in s.fields if not f.length_of]
         eq = " && ".join(f"{n}.contentEquals(other.{n})" if s.fields[[camel(x.name) for x in s.fields].index(n)].is_bytes
@@ -512,20 +539,27 @@ def kt_class(s, packet=None):
     if packet:
         c += ["/** Packet type. */", f"public const val TYPE: Int = {s.id}",
               f"internal const val PAYLOAD_SIZE_MAX: Int = {s.max_size}"]
-    c.append(f"internal fun decode(r: ByteReader): {s.kt_name} {{")
-    if not params:
-        c.append(f"    return {s.kt_name}")
+    sig = "b: ByteArray, at: Int, end: Int" if packet else "b: ByteArray, at: Int"
+    if packet:
+        c.append("/** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */")
     else:
+        c.append("/** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */")
+    if packet and not s.variable:
+        c.append("@Suppress(\"UNUSED_PARAMETER\") // a fixed-size payload ends where its size says")
+    if not params:
+        c.append(f"internal fun decode({sig}): {s.kt_name} = {s.kt_name}")
+    else:
+        c.append(f"internal fun decode({sig}): {s.kt_name} {{")
         for f in s.fields:
             if f.is_bytes:
                 counted = [x for x in s.fields if x.length_of == f.name]
                 if counted:
                     n = camel(counted[0].name)
-                    c.append(f"    if ({n} != r.remaining) throw LengthMismatch({n}, r.remaining)")
-            c.append(f"    val {camel(f.name)} = " + ("r.readU8()" if f.length_of else kt_read(f)))
+                    c.append(f"    if ({n} != end - ({kt_at(f.offset)})) throw LengthMismatch({n}, end - ({kt_at(f.offset)}))")
+            c.append(f"    val {camel(f.name)} = " + (f"b.u8({kt_at(f.offset)})" if f.length_of else kt_read(f, s)))
         args = ", ".join(camel(f.name) for f in s.fields if not f.length_of)
         c.append(f"    return {s.kt_name}({args})")
-    c.append("}")
+        c.append("}")
     if params:  # a packet without fields is a data object: its constants live in the object itself
         o.append("    public companion object {")
         o += ["        " + line for line in c]
@@ -605,11 +639,22 @@ def gen_kotlin(model):
     for p in model.packets:
         o.append(f"    PacketSpec({p.id}, \"{p.name}\", {p.size}, {p.max_size}, {str(p.dir == 'r2h').lower()}, {str(p.ack).lower()}),")
     o += [").associateBy { it.type }", "",
-          "/** Decodes a payload whose length was already checked against [PACKET_SPECS]. */",
-          "internal fun decodePayload(type: Int, r: ByteReader): Packet = when (type) {"]
+          "/** [PACKET_SPECS] indexed by type (0..255): one array load per frame. */",
+          "internal val PACKET_SPEC_BY_TYPE: Array<PacketSpec?> = arrayOfNulls<PacketSpec>(256).also { a -> PACKET_SPECS.values.forEach { a[it.type] = it } }", "",
+          "/** Decodes the payload in [b] from [at] to [end], whose length was already checked against [PACKET_SPECS]. */",
+          "internal fun decodePacketPayload(type: Int, b: ByteArray, at: Int, end: Int): Packet = when (type) {"]
     for p in model.packets:
-        o.append(f"    {p.id} -> {p.kt_name}.decode(r)")
-    o += ["    else -> throw IllegalArgumentException(\"unknown packet type $type\")", "}", ""]
+        o.append(f"    {p.id} -> {p.kt_name}.decode(b, at, end)")
+    o += ["    else -> throw IllegalArgumentException(\"unknown packet type $type\")", "}", "",
+          "/** The encoded payload size of [p] in bytes. */",
+          "internal fun payloadSizeOf(p: Packet): Int = when (p) {"]
+    for p in model.packets:
+        o.append(f"    is {p.kt_name} -> p.payloadSize")
+    o += ["}", "", "/** Writes the payload of [p] into [b] from [at] ([payloadSizeOf] bytes): no intermediate array. */",
+          "internal fun encodePayloadInto(p: Packet, b: ByteArray, at: Int): Unit = when (p) {"]
+    for p in model.packets:
+        o.append(f"    is {p.kt_name} -> p.encodeTo(b, at)")
+    o += ["}", ""]
     # settings field table
     o += ["/** The wire type of a settings leaf. */",
           "public enum class FieldType(public val size: Int) { U8(1), I8(1), U16(2), I16(2), U32(4), I32(4), F32(4), CHAR(1) }", "",

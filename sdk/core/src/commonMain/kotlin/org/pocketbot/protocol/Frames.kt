@@ -17,16 +17,32 @@ public object Frames {
     /** The frame carrying [packet] with sequence number [seq] (0..255). */
     public fun encode(packet: Packet, seq: Int): ByteArray {
         require(seq in 0..255) { "seq $seq is not a byte" }
-        val payload = packet.encodePayload()
-        val frame = ByteArray(HEADER_SIZE + payload.size + CRC_SIZE)
+        val length = payloadSizeOf(packet)
+        // One right-sized array: header, payload encoded in place, CRC.
+        val frame = ByteArray(HEADER_SIZE + length + CRC_SIZE)
         frame[0] = packet.type.toByte()
         frame[1] = seq.toByte()
-        frame[2] = payload.size.toByte()
-        payload.copyInto(frame, HEADER_SIZE)
-        val crc = Crc16.compute(frame, 0, HEADER_SIZE + payload.size)
-        frame[frame.size - 2] = crc.toByte()
-        frame[frame.size - 1] = (crc shr 8).toByte()
+        frame[2] = length.toByte()
+        encodePayloadInto(packet, frame, HEADER_SIZE)
+        val crc = Crc16.compute(frame, 0, HEADER_SIZE + length)
+        frame[HEADER_SIZE + length] = crc.toByte()
+        frame[HEADER_SIZE + length + 1] = (crc shr 8).toByte()
         return frame
+    }
+
+    /**
+     * Decodes the payload of a packet of [type] ([length] bytes of [payload] from [offset], without frame header
+     * or CRC), or null when the type is unknown or the bytes do not fit it. Never throws for any bytes.
+     */
+    public fun decodePayload(type: Int, payload: ByteArray, offset: Int = 0, length: Int = payload.size - offset): Packet? {
+        if (offset < 0 || length < 0 || offset > payload.size - length) return null
+        val spec = if (type in 0..255) PACKET_SPEC_BY_TYPE[type] else null
+        if (spec == null || length < spec.minSize || length > spec.maxSize) return null
+        return try {
+            decodePacketPayload(type, payload, offset, offset + length)
+        } catch (e: LengthMismatch) {
+            null
+        }
     }
 
     /** Checks and decodes one frame (without SLIP). */
@@ -42,12 +58,12 @@ public object Frames {
         val expected = Crc16.compute(frame, 0, HEADER_SIZE + length)
         val actual = (frame[frame.size - 2].toInt() and 0xFF) or ((frame[frame.size - 1].toInt() and 0xFF) shl 8)
         if (expected != actual) return FrameResult.Failed(ProtocolError.BadCrc(expected, actual))
-        val spec = PACKET_SPECS[type] ?: return FrameResult.Failed(ProtocolError.UnknownType(type, seq))
+        val spec = PACKET_SPEC_BY_TYPE[type] ?: return FrameResult.Failed(ProtocolError.UnknownType(type, seq))
         if (length < spec.minSize || length > spec.maxSize) {
             return FrameResult.Failed(ProtocolError.BadLength(type, seq, length, frame.size))
         }
         return try {
-            FrameResult.Decoded(seq, decodePayload(type, ByteReader(frame, HEADER_SIZE, HEADER_SIZE + length)))
+            FrameResult.Decoded(seq, decodePacketPayload(type, frame, HEADER_SIZE, HEADER_SIZE + length))
         } catch (e: LengthMismatch) {
             FrameResult.Failed(ProtocolError.BadLength(type, seq, length, frame.size))
         }

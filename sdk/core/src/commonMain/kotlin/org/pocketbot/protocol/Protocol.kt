@@ -122,20 +122,21 @@ public data class Pid(
     /** clamp of the integral sum, in error units x ticks */
     public val iLimit: Float,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeF32(kp)
-        w.writeF32(ki)
-        w.writeF32(kd)
-        w.writeF32(iLimit)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putF32(at, kp)
+        b.putF32(at + 4, ki)
+        b.putF32(at + 8, kd)
+        b.putF32(at + 12, iLimit)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 16
-        internal fun decode(r: ByteReader): Pid {
-            val kp = r.readF32()
-            val ki = r.readF32()
-            val kd = r.readF32()
-            val iLimit = r.readF32()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): Pid {
+            val kp = b.f32(at)
+            val ki = b.f32(at + 4)
+            val kd = b.f32(at + 8)
+            val iLimit = b.f32(at + 12)
             return Pid(kp, ki, kd, iLimit)
         }
     }
@@ -152,20 +153,21 @@ public data class ProximitySide(
     /** distance class of that robot (see [DistanceClass]) */
     public val distance: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(flags)
-        w.writeU8(robotId)
-        w.writeU8(robotLed)
-        w.writeU8(distance)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, flags)
+        b.putU8(at + 1, robotId)
+        b.putU8(at + 2, robotLed)
+        b.putU8(at + 3, distance)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 4
-        internal fun decode(r: ByteReader): ProximitySide {
-            val flags = r.readU8()
-            val robotId = r.readU8()
-            val robotLed = r.readU8()
-            val distance = r.readU8()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): ProximitySide {
+            val flags = b.u8(at)
+            val robotId = b.u8(at + 1)
+            val robotLed = b.u8(at + 2)
+            val distance = b.u8(at + 3)
             return ProximitySide(flags, robotId, robotLed, distance)
         }
     }
@@ -178,16 +180,17 @@ public data class SettingsIdentity(
     /** user-friendly name */
     public val name: String,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(robotId)
-        w.writeText(name, 16)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, robotId)
+        b.putText(at + 1, name, 16)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 17
-        internal fun decode(r: ByteReader): SettingsIdentity {
-            val robotId = r.readU8()
-            val name = r.readText(16)
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsIdentity {
+            val robotId = b.u8(at)
+            val name = b.text(at + 1, 16)
             return SettingsIdentity(robotId, name)
         }
     }
@@ -200,16 +203,17 @@ public data class SettingsSync(
     /** period of state packets [ms] */
     public val periodMs: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(mode)
-        w.writeU16(periodMs)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, mode)
+        b.putU16(at + 1, periodMs)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 3
-        internal fun decode(r: ByteReader): SettingsSync {
-            val mode = r.readU8()
-            val periodMs = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsSync {
+            val mode = b.u8(at)
+            val periodMs = b.u16(at + 1)
             return SettingsSync(mode, periodMs)
         }
     }
@@ -220,14 +224,15 @@ public data class SettingsScheduler(
     /** period of the main loop tick [us] */
     public val mainPeriodUs: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(mainPeriodUs)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, mainPeriodUs)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
-        internal fun decode(r: ByteReader): SettingsScheduler {
-            val mainPeriodUs = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsScheduler {
+            val mainPeriodUs = b.u16(at)
             return SettingsScheduler(mainPeriodUs)
         }
     }
@@ -242,18 +247,19 @@ public data class SettingsProfile(
     /** speed at start and end of the profile [m/s] */
     public val minSpeedMps: Float,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeF32(accelMps2)
-        w.writeF32(decelMps2)
-        w.writeF32(minSpeedMps)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putF32(at, accelMps2)
+        b.putF32(at + 4, decelMps2)
+        b.putF32(at + 8, minSpeedMps)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 12
-        internal fun decode(r: ByteReader): SettingsProfile {
-            val accelMps2 = r.readF32()
-            val decelMps2 = r.readF32()
-            val minSpeedMps = r.readF32()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsProfile {
+            val accelMps2 = b.f32(at)
+            val decelMps2 = b.f32(at + 4)
+            val minSpeedMps = b.f32(at + 8)
             return SettingsProfile(accelMps2, decelMps2, minSpeedMps)
         }
     }
@@ -272,22 +278,23 @@ public data class SettingsLineFollow(
     /** 1: keep following when the host link is lost */
     public val autonomous: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeF32(speedMps)
-        w.writeF32(redSpeedMps)
-        w.writeF32(blueSpeedMps)
-        w.writeU16(lostTimeoutMs)
-        w.writeU8(autonomous)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putF32(at, speedMps)
+        b.putF32(at + 4, redSpeedMps)
+        b.putF32(at + 8, blueSpeedMps)
+        b.putU16(at + 12, lostTimeoutMs)
+        b.putU8(at + 14, autonomous)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 15
-        internal fun decode(r: ByteReader): SettingsLineFollow {
-            val speedMps = r.readF32()
-            val redSpeedMps = r.readF32()
-            val blueSpeedMps = r.readF32()
-            val lostTimeoutMs = r.readU16()
-            val autonomous = r.readU8()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsLineFollow {
+            val speedMps = b.f32(at)
+            val redSpeedMps = b.f32(at + 4)
+            val blueSpeedMps = b.f32(at + 8)
+            val lostTimeoutMs = b.u16(at + 12)
+            val autonomous = b.u8(at + 14)
             return SettingsLineFollow(speedMps, redSpeedMps, blueSpeedMps, lostTimeoutMs, autonomous)
         }
     }
@@ -302,18 +309,19 @@ public data class SettingsLineSensor(
     /** calibrated darkness above which a spot sees the line [permille] */
     public val threshold: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        require(calMin.size == 8) { "cal_min needs 8 values" }; calMin.forEach { w.writeU16(it) }
-        require(calMax.size == 8) { "cal_max needs 8 values" }; calMax.forEach { w.writeU16(it) }
-        w.writeU16(threshold)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        intsOf(calMin, 8, "cal_min").let { a -> for (i in 0 until 8) b.putU16(at + 2 * i, a[i]) }
+        intsOf(calMax, 8, "cal_max").let { a -> for (i in 0 until 8) b.putU16(at + 16 + 2 * i, a[i]) }
+        b.putU16(at + 32, threshold)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 34
-        internal fun decode(r: ByteReader): SettingsLineSensor {
-            val calMin = List(8) { r.readU16() }
-            val calMax = List(8) { r.readU16() }
-            val threshold = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsLineSensor {
+            val calMin = IntArrayList(IntArray(8) { b.u16(at + 2 * it) })
+            val calMax = IntArrayList(IntArray(8) { b.u16(at + 16 + 2 * it) })
+            val threshold = b.u16(at + 32)
             return SettingsLineSensor(calMin, calMax, threshold)
         }
     }
@@ -326,16 +334,17 @@ public data class SettingsEncoder(
     /** speed reads zero after no pulse this long [ms] */
     public val speedTimeoutMs: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(pulsesPerRev)
-        w.writeU16(speedTimeoutMs)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, pulsesPerRev)
+        b.putU16(at + 2, speedTimeoutMs)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 4
-        internal fun decode(r: ByteReader): SettingsEncoder {
-            val pulsesPerRev = r.readU16()
-            val speedTimeoutMs = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsEncoder {
+            val pulsesPerRev = b.u16(at)
+            val speedTimeoutMs = b.u16(at + 2)
             return SettingsEncoder(pulsesPerRev, speedTimeoutMs)
         }
     }
@@ -348,16 +357,17 @@ public data class SettingsGeometry(
     /** distance between the wheels (gauge) [m] */
     public val wheelBaseM: Float,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeF32(wheelDiameterM)
-        w.writeF32(wheelBaseM)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putF32(at, wheelDiameterM)
+        b.putF32(at + 4, wheelBaseM)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
-        internal fun decode(r: ByteReader): SettingsGeometry {
-            val wheelDiameterM = r.readF32()
-            val wheelBaseM = r.readF32()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsGeometry {
+            val wheelDiameterM = b.f32(at)
+            val wheelBaseM = b.f32(at + 4)
             return SettingsGeometry(wheelDiameterM, wheelBaseM)
         }
     }
@@ -368,14 +378,15 @@ public data class SettingsMotors(
     /** largest PWM duty the controllers may command [permille] */
     public val pwmLimit: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(pwmLimit)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, pwmLimit)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
-        internal fun decode(r: ByteReader): SettingsMotors {
-            val pwmLimit = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsMotors {
+            val pwmLimit = b.u16(at)
             return SettingsMotors(pwmLimit)
         }
     }
@@ -390,18 +401,19 @@ public data class SettingsProximity(
     /** how long a sighting stays in the state [ms] */
     public val holdMs: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(irPower)
-        w.writeU16(beaconPeriodMs)
-        w.writeU16(holdMs)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, irPower)
+        b.putU16(at + 1, beaconPeriodMs)
+        b.putU16(at + 3, holdMs)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 5
-        internal fun decode(r: ByteReader): SettingsProximity {
-            val irPower = r.readU8()
-            val beaconPeriodMs = r.readU16()
-            val holdMs = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsProximity {
+            val irPower = b.u8(at)
+            val beaconPeriodMs = b.u16(at + 1)
+            val holdMs = b.u16(at + 3)
             return SettingsProximity(irPower, beaconPeriodMs, holdMs)
         }
     }
@@ -412,14 +424,15 @@ public data class SettingsLink(
     /** stop host-driven motion after this long without a packet; 0 = off [ms] */
     public val failsafeTimeoutMs: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(failsafeTimeoutMs)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, failsafeTimeoutMs)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
-        internal fun decode(r: ByteReader): SettingsLink {
-            val failsafeTimeoutMs = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsLink {
+            val failsafeTimeoutMs = b.u16(at)
             return SettingsLink(failsafeTimeoutMs)
         }
     }
@@ -430,14 +443,15 @@ public data class SettingsDebug(
     /** 0 off, 1 errors, 2 info, 3 verbose, 4 trace */
     public val level: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(level)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, level)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 1
-        internal fun decode(r: ByteReader): SettingsDebug {
-            val level = r.readU8()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): SettingsDebug {
+            val level = b.u8(at)
             return SettingsDebug(level)
         }
     }
@@ -452,18 +466,19 @@ public data class StateTime(
     /** main loop ticks that overran their period */
     public val overruns: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU32(timeMs)
-        w.writeU16(tickMaxUs)
-        w.writeU16(overruns)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU32(at, timeMs)
+        b.putU16(at + 4, tickMaxUs)
+        b.putU16(at + 6, overruns)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
-        internal fun decode(r: ByteReader): StateTime {
-            val timeMs = r.readU32()
-            val tickMaxUs = r.readU16()
-            val overruns = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateTime {
+            val timeMs = b.u32(at)
+            val tickMaxUs = b.u16(at + 4)
+            val overruns = b.u16(at + 6)
             return StateTime(timeMs, tickMaxUs, overruns)
         }
     }
@@ -476,16 +491,17 @@ public data class StateEncoders(
     /** right wheel [pulses] */
     public val right: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeI32(left)
-        w.writeI32(right)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putI32(at, left)
+        b.putI32(at + 4, right)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
-        internal fun decode(r: ByteReader): StateEncoders {
-            val left = r.readI32()
-            val right = r.readI32()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateEncoders {
+            val left = b.i32(at)
+            val right = b.i32(at + 4)
             return StateEncoders(left, right)
         }
     }
@@ -502,20 +518,21 @@ public data class StateWheels(
     /** right motor duty, -1000..1000 [permille] */
     public val pwmRight: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeI16(speedLeftMmps)
-        w.writeI16(speedRightMmps)
-        w.writeI16(pwmLeft)
-        w.writeI16(pwmRight)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putI16(at, speedLeftMmps)
+        b.putI16(at + 2, speedRightMmps)
+        b.putI16(at + 4, pwmLeft)
+        b.putI16(at + 6, pwmRight)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
-        internal fun decode(r: ByteReader): StateWheels {
-            val speedLeftMmps = r.readI16()
-            val speedRightMmps = r.readI16()
-            val pwmLeft = r.readI16()
-            val pwmRight = r.readI16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateWheels {
+            val speedLeftMmps = b.i16(at)
+            val speedRightMmps = b.i16(at + 2)
+            val pwmLeft = b.i16(at + 4)
+            val pwmRight = b.i16(at + 6)
             return StateWheels(speedLeftMmps, speedRightMmps, pwmLeft, pwmRight)
         }
     }
@@ -530,18 +547,19 @@ public data class StateLine(
     /** bit0 line seen, bit1 line lost (timeout) */
     public val flags: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        require(raw.size == 8) { "raw needs 8 values" }; raw.forEach { w.writeU16(it) }
-        w.writeI16(position)
-        w.writeU8(flags)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        intsOf(raw, 8, "raw").let { a -> for (i in 0 until 8) b.putU16(at + 2 * i, a[i]) }
+        b.putI16(at + 16, position)
+        b.putU8(at + 18, flags)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 19
-        internal fun decode(r: ByteReader): StateLine {
-            val raw = List(8) { r.readU16() }
-            val position = r.readI16()
-            val flags = r.readU8()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateLine {
+            val raw = IntArrayList(IntArray(8) { b.u16(at + 2 * it) })
+            val position = b.i16(at + 16)
+            val flags = b.u8(at + 18)
             return StateLine(raw, position, flags)
         }
     }
@@ -554,16 +572,17 @@ public data class StateLineFollow(
     /** colour of the segment under the robot (see [Colour]) */
     public val segment: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(status)
-        w.writeU8(segment)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, status)
+        b.putU8(at + 1, segment)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
-        internal fun decode(r: ByteReader): StateLineFollow {
-            val status = r.readU8()
-            val segment = r.readU8()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateLineFollow {
+            val status = b.u8(at)
+            val segment = b.u8(at + 1)
             return StateLineFollow(status, segment)
         }
     }
@@ -576,16 +595,17 @@ public data class StateProximity(
     /** rear receiver */
     public val rear: ProximitySide,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        front.encodeTo(w)
-        rear.encodeTo(w)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        front.encodeTo(b, at)
+        rear.encodeTo(b, at + 4)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
-        internal fun decode(r: ByteReader): StateProximity {
-            val front = ProximitySide.decode(r)
-            val rear = ProximitySide.decode(r)
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateProximity {
+            val front = ProximitySide.decode(b, at)
+            val rear = ProximitySide.decode(b, at + 4)
             return StateProximity(front, rear)
         }
     }
@@ -604,22 +624,23 @@ public data class StateColour(
     /** classified colour (see [Colour]) */
     public val detected: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(red)
-        w.writeU8(green)
-        w.writeU8(blue)
-        w.writeU8(clear)
-        w.writeU8(detected)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, red)
+        b.putU8(at + 1, green)
+        b.putU8(at + 2, blue)
+        b.putU8(at + 3, clear)
+        b.putU8(at + 4, detected)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 5
-        internal fun decode(r: ByteReader): StateColour {
-            val red = r.readU8()
-            val green = r.readU8()
-            val blue = r.readU8()
-            val clear = r.readU8()
-            val detected = r.readU8()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateColour {
+            val red = b.u8(at)
+            val green = b.u8(at + 1)
+            val blue = b.u8(at + 2)
+            val clear = b.u8(at + 3)
+            val detected = b.u8(at + 4)
             return StateColour(red, green, blue, clear, detected)
         }
     }
@@ -634,18 +655,19 @@ public data class StateAccel(
     /** up [mg] */
     public val zMg: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeI16(xMg)
-        w.writeI16(yMg)
-        w.writeI16(zMg)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putI16(at, xMg)
+        b.putI16(at + 2, yMg)
+        b.putI16(at + 4, zMg)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 6
-        internal fun decode(r: ByteReader): StateAccel {
-            val xMg = r.readI16()
-            val yMg = r.readI16()
-            val zMg = r.readI16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateAccel {
+            val xMg = b.i16(at)
+            val yMg = b.i16(at + 2)
+            val zMg = b.i16(at + 4)
             return StateAccel(xMg, yMg, zMg)
         }
     }
@@ -660,18 +682,19 @@ public data class StatePower(
     /** MCU core temperature [0.1 degC] */
     public val mcuTempDc: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(batteryMv)
-        w.writeU16(currentMa)
-        w.writeI16(mcuTempDc)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, batteryMv)
+        b.putU16(at + 2, currentMa)
+        b.putI16(at + 4, mcuTempDc)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 6
-        internal fun decode(r: ByteReader): StatePower {
-            val batteryMv = r.readU16()
-            val currentMa = r.readU16()
-            val mcuTempDc = r.readI16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StatePower {
+            val batteryMv = b.u16(at)
+            val currentMa = b.u16(at + 2)
+            val mcuTempDc = b.i16(at + 4)
             return StatePower(batteryMv, currentMa, mcuTempDc)
         }
     }
@@ -684,16 +707,17 @@ public data class StateIndicators(
     /** power of the last IR beacon [percent] */
     public val irPower: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(led)
-        w.writeU8(irPower)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, led)
+        b.putU8(at + 1, irPower)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
-        internal fun decode(r: ByteReader): StateIndicators {
-            val led = r.readU8()
-            val irPower = r.readU8()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateIndicators {
+            val led = b.u8(at)
+            val irPower = b.u8(at + 1)
             return StateIndicators(led, irPower)
         }
     }
@@ -710,20 +734,21 @@ public data class StateLocomotion(
     /** id of the last finished movement, 0 if none */
     public val finishedId: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(mode)
-        w.writeU8(queueLength)
-        w.writeU16(currentId)
-        w.writeU16(finishedId)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, mode)
+        b.putU8(at + 1, queueLength)
+        b.putU16(at + 2, currentId)
+        b.putU16(at + 4, finishedId)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 6
-        internal fun decode(r: ByteReader): StateLocomotion {
-            val mode = r.readU8()
-            val queueLength = r.readU8()
-            val currentId = r.readU16()
-            val finishedId = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateLocomotion {
+            val mode = b.u8(at)
+            val queueLength = b.u8(at + 1)
+            val currentId = b.u16(at + 2)
+            val finishedId = b.u16(at + 4)
             return StateLocomotion(mode, queueLength, currentId, finishedId)
         }
     }
@@ -742,22 +767,23 @@ public data class StateErrors(
     /** packets not sent because the transmit buffer was full */
     public val txDropped: Int,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(crc)
-        w.writeU16(framing)
-        w.writeU16(rejected)
-        w.writeU16(rxOverflow)
-        w.writeU16(txDropped)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, crc)
+        b.putU16(at + 2, framing)
+        b.putU16(at + 4, rejected)
+        b.putU16(at + 6, rxOverflow)
+        b.putU16(at + 8, txDropped)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 10
-        internal fun decode(r: ByteReader): StateErrors {
-            val crc = r.readU16()
-            val framing = r.readU16()
-            val rejected = r.readU16()
-            val rxOverflow = r.readU16()
-            val txDropped = r.readU16()
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): StateErrors {
+            val crc = b.u16(at)
+            val framing = b.u16(at + 2)
+            val rejected = b.u16(at + 4)
+            val rxOverflow = b.u16(at + 6)
+            val txDropped = b.u16(at + 8)
             return StateErrors(crc, framing, rejected, rxOverflow, txDropped)
         }
     }
@@ -790,36 +816,37 @@ public data class RobotState(
     /** Link error counters since reset. */
     public val errors: StateErrors,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        time.encodeTo(w)
-        encoders.encodeTo(w)
-        wheels.encodeTo(w)
-        line.encodeTo(w)
-        lineFollow.encodeTo(w)
-        proximity.encodeTo(w)
-        colour.encodeTo(w)
-        accel.encodeTo(w)
-        power.encodeTo(w)
-        indicators.encodeTo(w)
-        locomotion.encodeTo(w)
-        errors.encodeTo(w)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        time.encodeTo(b, at)
+        encoders.encodeTo(b, at + 8)
+        wheels.encodeTo(b, at + 16)
+        line.encodeTo(b, at + 24)
+        lineFollow.encodeTo(b, at + 43)
+        proximity.encodeTo(b, at + 45)
+        colour.encodeTo(b, at + 53)
+        accel.encodeTo(b, at + 58)
+        power.encodeTo(b, at + 64)
+        indicators.encodeTo(b, at + 70)
+        locomotion.encodeTo(b, at + 72)
+        errors.encodeTo(b, at + 78)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 88
-        internal fun decode(r: ByteReader): RobotState {
-            val time = StateTime.decode(r)
-            val encoders = StateEncoders.decode(r)
-            val wheels = StateWheels.decode(r)
-            val line = StateLine.decode(r)
-            val lineFollow = StateLineFollow.decode(r)
-            val proximity = StateProximity.decode(r)
-            val colour = StateColour.decode(r)
-            val accel = StateAccel.decode(r)
-            val power = StatePower.decode(r)
-            val indicators = StateIndicators.decode(r)
-            val locomotion = StateLocomotion.decode(r)
-            val errors = StateErrors.decode(r)
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): RobotState {
+            val time = StateTime.decode(b, at)
+            val encoders = StateEncoders.decode(b, at + 8)
+            val wheels = StateWheels.decode(b, at + 16)
+            val line = StateLine.decode(b, at + 24)
+            val lineFollow = StateLineFollow.decode(b, at + 43)
+            val proximity = StateProximity.decode(b, at + 45)
+            val colour = StateColour.decode(b, at + 53)
+            val accel = StateAccel.decode(b, at + 58)
+            val power = StatePower.decode(b, at + 64)
+            val indicators = StateIndicators.decode(b, at + 70)
+            val locomotion = StateLocomotion.decode(b, at + 72)
+            val errors = StateErrors.decode(b, at + 78)
             return RobotState(time, encoders, wheels, line, lineFollow, proximity, colour, accel, power, indicators, locomotion, errors)
         }
     }
@@ -860,44 +887,45 @@ public data class Settings(
     /** Debug text sent to the host. */
     public val debug: SettingsDebug,
 ) {
-    internal fun encodeTo(w: ByteWriter) {
-        identity.encodeTo(w)
-        sync.encodeTo(w)
-        scheduler.encodeTo(w)
-        speedPid.encodeTo(w)
-        wheelPid.encodeTo(w)
-        wheelBalance.encodeTo(w)
-        linePid.encodeTo(w)
-        profile.encodeTo(w)
-        lineFollow.encodeTo(w)
-        lineSensor.encodeTo(w)
-        encoder.encodeTo(w)
-        geometry.encodeTo(w)
-        motors.encodeTo(w)
-        proximity.encodeTo(w)
-        link.encodeTo(w)
-        debug.encodeTo(w)
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        identity.encodeTo(b, at)
+        sync.encodeTo(b, at + 17)
+        scheduler.encodeTo(b, at + 20)
+        speedPid.encodeTo(b, at + 22)
+        wheelPid.encodeTo(b, at + 38)
+        wheelBalance.encodeTo(b, at + 54)
+        linePid.encodeTo(b, at + 70)
+        profile.encodeTo(b, at + 86)
+        lineFollow.encodeTo(b, at + 98)
+        lineSensor.encodeTo(b, at + 113)
+        encoder.encodeTo(b, at + 147)
+        geometry.encodeTo(b, at + 151)
+        motors.encodeTo(b, at + 159)
+        proximity.encodeTo(b, at + 161)
+        link.encodeTo(b, at + 166)
+        debug.encodeTo(b, at + 168)
     }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 169
-        internal fun decode(r: ByteReader): Settings {
-            val identity = SettingsIdentity.decode(r)
-            val sync = SettingsSync.decode(r)
-            val scheduler = SettingsScheduler.decode(r)
-            val speedPid = Pid.decode(r)
-            val wheelPid = Pid.decode(r)
-            val wheelBalance = Pid.decode(r)
-            val linePid = Pid.decode(r)
-            val profile = SettingsProfile.decode(r)
-            val lineFollow = SettingsLineFollow.decode(r)
-            val lineSensor = SettingsLineSensor.decode(r)
-            val encoder = SettingsEncoder.decode(r)
-            val geometry = SettingsGeometry.decode(r)
-            val motors = SettingsMotors.decode(r)
-            val proximity = SettingsProximity.decode(r)
-            val link = SettingsLink.decode(r)
-            val debug = SettingsDebug.decode(r)
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        internal fun decode(b: ByteArray, at: Int): Settings {
+            val identity = SettingsIdentity.decode(b, at)
+            val sync = SettingsSync.decode(b, at + 17)
+            val scheduler = SettingsScheduler.decode(b, at + 20)
+            val speedPid = Pid.decode(b, at + 22)
+            val wheelPid = Pid.decode(b, at + 38)
+            val wheelBalance = Pid.decode(b, at + 54)
+            val linePid = Pid.decode(b, at + 70)
+            val profile = SettingsProfile.decode(b, at + 86)
+            val lineFollow = SettingsLineFollow.decode(b, at + 98)
+            val lineSensor = SettingsLineSensor.decode(b, at + 113)
+            val encoder = SettingsEncoder.decode(b, at + 147)
+            val geometry = SettingsGeometry.decode(b, at + 151)
+            val motors = SettingsMotors.decode(b, at + 159)
+            val proximity = SettingsProximity.decode(b, at + 161)
+            val link = SettingsLink.decode(b, at + 166)
+            val debug = SettingsDebug.decode(b, at + 168)
             return Settings(identity, sync, scheduler, speedPid, wheelPid, wheelBalance, linePid, profile, lineFollow, lineSensor, encoder, geometry, motors, proximity, link, debug)
         }
     }
@@ -925,34 +953,38 @@ public data class Hello(
     public val stateSize: Int,
 ) : Packet {
     override val type: Int get() = 1
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(robotId)
-        w.writeText(name, 16)
-        w.writeU8(fwMajor)
-        w.writeU8(fwMinor)
-        w.writeU8(fwPatch)
-        w.writeU16(protocolVersion)
-        w.writeU32(layoutHash)
-        w.writeU16(settingsSize)
-        w.writeU16(stateSize)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 30
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, robotId)
+        b.putText(at + 1, name, 16)
+        b.putU8(at + 17, fwMajor)
+        b.putU8(at + 18, fwMinor)
+        b.putU8(at + 19, fwPatch)
+        b.putU16(at + 20, protocolVersion)
+        b.putU32(at + 22, layoutHash)
+        b.putU16(at + 26, settingsSize)
+        b.putU16(at + 28, stateSize)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 30
         /** Packet type. */
         public const val TYPE: Int = 1
         internal const val PAYLOAD_SIZE_MAX: Int = 30
-        internal fun decode(r: ByteReader): Hello {
-            val robotId = r.readU8()
-            val name = r.readText(16)
-            val fwMajor = r.readU8()
-            val fwMinor = r.readU8()
-            val fwPatch = r.readU8()
-            val protocolVersion = r.readU16()
-            val layoutHash = r.readU32()
-            val settingsSize = r.readU16()
-            val stateSize = r.readU16()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): Hello {
+            val robotId = b.u8(at)
+            val name = b.text(at + 1, 16)
+            val fwMajor = b.u8(at + 17)
+            val fwMinor = b.u8(at + 18)
+            val fwPatch = b.u8(at + 19)
+            val protocolVersion = b.u16(at + 20)
+            val layoutHash = b.u32(at + 22)
+            val settingsSize = b.u16(at + 26)
+            val stateSize = b.u16(at + 28)
             return Hello(robotId, name, fwMajor, fwMinor, fwPatch, protocolVersion, layoutHash, settingsSize, stateSize)
         }
     }
@@ -964,18 +996,22 @@ public data class StateFull(
     public val state: RobotState,
 ) : Packet {
     override val type: Int get() = 2
-    internal fun encodeTo(w: ByteWriter) {
-        state.encodeTo(w)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 88
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        state.encodeTo(b, at)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 88
         /** Packet type. */
         public const val TYPE: Int = 2
         internal const val PAYLOAD_SIZE_MAX: Int = 88
-        internal fun decode(r: ByteReader): StateFull {
-            val state = RobotState.decode(r)
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): StateFull {
+            val state = RobotState.decode(b, at)
             return StateFull(state)
         }
     }
@@ -999,30 +1035,34 @@ public data class StateReduced(
     public val lineFlags: Int,
 ) : Packet {
     override val type: Int get() = 3
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU32(timeMs)
-        w.writeI32(encoderLeft)
-        w.writeI32(encoderRight)
-        w.writeI16(speedLeftMmps)
-        w.writeI16(speedRightMmps)
-        w.writeI16(linePosition)
-        w.writeU8(lineFlags)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 19
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU32(at, timeMs)
+        b.putI32(at + 4, encoderLeft)
+        b.putI32(at + 8, encoderRight)
+        b.putI16(at + 12, speedLeftMmps)
+        b.putI16(at + 14, speedRightMmps)
+        b.putI16(at + 16, linePosition)
+        b.putU8(at + 18, lineFlags)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 19
         /** Packet type. */
         public const val TYPE: Int = 3
         internal const val PAYLOAD_SIZE_MAX: Int = 19
-        internal fun decode(r: ByteReader): StateReduced {
-            val timeMs = r.readU32()
-            val encoderLeft = r.readI32()
-            val encoderRight = r.readI32()
-            val speedLeftMmps = r.readI16()
-            val speedRightMmps = r.readI16()
-            val linePosition = r.readI16()
-            val lineFlags = r.readU8()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): StateReduced {
+            val timeMs = b.u32(at)
+            val encoderLeft = b.i32(at + 4)
+            val encoderRight = b.i32(at + 8)
+            val speedLeftMmps = b.i16(at + 12)
+            val speedRightMmps = b.i16(at + 14)
+            val linePosition = b.i16(at + 16)
+            val lineFlags = b.u8(at + 18)
             return StateReduced(timeMs, encoderLeft, encoderRight, speedLeftMmps, speedRightMmps, linePosition, lineFlags)
         }
     }
@@ -1034,18 +1074,22 @@ public data class Ack(
     public val ackedType: Int,
 ) : Packet {
     override val type: Int get() = 4
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(ackedType)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 1
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, ackedType)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 1
         /** Packet type. */
         public const val TYPE: Int = 4
         internal const val PAYLOAD_SIZE_MAX: Int = 1
-        internal fun decode(r: ByteReader): Ack {
-            val ackedType = r.readU8()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): Ack {
+            val ackedType = b.u8(at)
             return Ack(ackedType)
         }
     }
@@ -1063,24 +1107,28 @@ public data class Error(
     public val detail: Int,
 ) : Packet {
     override val type: Int get() = 5
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(code)
-        w.writeU8(packetType)
-        w.writeU8(seq)
-        w.writeU16(detail)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 5
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, code)
+        b.putU8(at + 1, packetType)
+        b.putU8(at + 2, seq)
+        b.putU16(at + 3, detail)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 5
         /** Packet type. */
         public const val TYPE: Int = 5
         internal const val PAYLOAD_SIZE_MAX: Int = 5
-        internal fun decode(r: ByteReader): Error {
-            val code = r.readU8()
-            val packetType = r.readU8()
-            val seq = r.readU8()
-            val detail = r.readU16()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): Error {
+            val code = b.u8(at)
+            val packetType = b.u8(at + 1)
+            val seq = b.u8(at + 2)
+            val detail = b.u16(at + 3)
             return Error(code, packetType, seq, detail)
         }
     }
@@ -1094,12 +1142,14 @@ public class SettingsData(
     public val data: ByteArray,
 ) : Packet {
     override val type: Int get() = 6
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(offset)
-        w.writeU8(data.size)
-        w.writeBytes(data)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 3 + data.size
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, offset)
+        b.putU8(at + 2, data.size)
+        data.copyInto(b, at + 3)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     override fun equals(other: Any?): Boolean = other is SettingsData && offset == other.offset && data.contentEquals(other.data)
     override fun hashCode(): Int = 1 * offset.hashCode() + 31 * data.contentHashCode()
     override fun toString(): String = "SettingsData(offset=$offset, data=${data.toHex()})"
@@ -1109,11 +1159,12 @@ public class SettingsData(
         /** Packet type. */
         public const val TYPE: Int = 6
         internal const val PAYLOAD_SIZE_MAX: Int = 67
-        internal fun decode(r: ByteReader): SettingsData {
-            val offset = r.readU16()
-            val length = r.readU8()
-            if (length != r.remaining) throw LengthMismatch(length, r.remaining)
-            val data = r.readBytes(r.remaining)
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        internal fun decode(b: ByteArray, at: Int, end: Int): SettingsData {
+            val offset = b.u16(at)
+            val length = b.u8(at + 2)
+            if (length != end - (at + 3)) throw LengthMismatch(length, end - (at + 3))
+            val data = b.copyOfRange(at + 3, end)
             return SettingsData(offset, data)
         }
     }
@@ -1129,12 +1180,14 @@ public class DebugText(
     public val text: ByteArray,
 ) : Packet {
     override val type: Int get() = 7
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(module)
-        w.writeU8(level)
-        w.writeBytes(text)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 2 + text.size
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, module)
+        b.putU8(at + 1, level)
+        text.copyInto(b, at + 2)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     override fun equals(other: Any?): Boolean = other is DebugText && module == other.module && level == other.level && text.contentEquals(other.text)
     override fun hashCode(): Int = 1 * module.hashCode() + 31 * level.hashCode() + 961 * text.contentHashCode()
     override fun toString(): String = "DebugText(module=$module, level=$level, text=${text.toHex()})"
@@ -1144,10 +1197,11 @@ public class DebugText(
         /** Packet type. */
         public const val TYPE: Int = 7
         internal const val PAYLOAD_SIZE_MAX: Int = 98
-        internal fun decode(r: ByteReader): DebugText {
-            val module = r.readU8()
-            val level = r.readU8()
-            val text = r.readBytes(r.remaining)
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        internal fun decode(b: ByteArray, at: Int, end: Int): DebugText {
+            val module = b.u8(at)
+            val level = b.u8(at + 1)
+            val text = b.copyOfRange(at + 2, end)
             return DebugText(module, level, text)
         }
     }
@@ -1167,14 +1221,16 @@ public class IrReceived(
     public val data: ByteArray,
 ) : Packet {
     override val type: Int get() = 8
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(senderId)
-        w.writeU8(side)
-        w.writeU8(senderLed)
-        w.writeU8(power)
-        w.writeBytes(data)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 4 + data.size
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, senderId)
+        b.putU8(at + 1, side)
+        b.putU8(at + 2, senderLed)
+        b.putU8(at + 3, power)
+        data.copyInto(b, at + 4)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     override fun equals(other: Any?): Boolean = other is IrReceived && senderId == other.senderId && side == other.side && senderLed == other.senderLed && power == other.power && data.contentEquals(other.data)
     override fun hashCode(): Int = 1 * senderId.hashCode() + 31 * side.hashCode() + 961 * senderLed.hashCode() + 29791 * power.hashCode() + 923521 * data.contentHashCode()
     override fun toString(): String = "IrReceived(senderId=$senderId, side=$side, senderLed=$senderLed, power=$power, data=${data.toHex()})"
@@ -1184,12 +1240,13 @@ public class IrReceived(
         /** Packet type. */
         public const val TYPE: Int = 8
         internal const val PAYLOAD_SIZE_MAX: Int = 12
-        internal fun decode(r: ByteReader): IrReceived {
-            val senderId = r.readU8()
-            val side = r.readU8()
-            val senderLed = r.readU8()
-            val power = r.readU8()
-            val data = r.readBytes(r.remaining)
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        internal fun decode(b: ByteArray, at: Int, end: Int): IrReceived {
+            val senderId = b.u8(at)
+            val side = b.u8(at + 1)
+            val senderLed = b.u8(at + 2)
+            val power = b.u8(at + 3)
+            val data = b.copyOfRange(at + 4, end)
             return IrReceived(senderId, side, senderLed, power, data)
         }
     }
@@ -1201,18 +1258,22 @@ public data class MovementDone(
     public val id: Int,
 ) : Packet {
     override val type: Int get() = 9
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(id)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 2
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, id)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
         /** Packet type. */
         public const val TYPE: Int = 9
         internal const val PAYLOAD_SIZE_MAX: Int = 2
-        internal fun decode(r: ByteReader): MovementDone {
-            val id = r.readU16()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): MovementDone {
+            val id = b.u16(at)
             return MovementDone(id)
         }
     }
@@ -1224,18 +1285,22 @@ public data class HelloRequest(
     public val hostProtocolVersion: Int,
 ) : Packet {
     override val type: Int get() = 16
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(hostProtocolVersion)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 2
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, hostProtocolVersion)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
         /** Packet type. */
         public const val TYPE: Int = 16
         internal const val PAYLOAD_SIZE_MAX: Int = 2
-        internal fun decode(r: ByteReader): HelloRequest {
-            val hostProtocolVersion = r.readU16()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): HelloRequest {
+            val hostProtocolVersion = b.u16(at)
             return HelloRequest(hostProtocolVersion)
         }
     }
@@ -1244,17 +1309,20 @@ public data class HelloRequest(
 /** Keeps the link failsafe from stopping the robot when the host has nothing else to say. */
 public data object Heartbeat : Packet {
     override val type: Int get() = 17
-    internal fun encodeTo(w: ByteWriter) {
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 0
+    @Suppress("UNUSED_PARAMETER") // no payload
+    internal fun encodeTo(b: ByteArray, at: Int) {
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     /** Encoded size in bytes. */
     public const val SIZE: Int = 0
     /** Packet type. */
     public const val TYPE: Int = 17
     internal const val PAYLOAD_SIZE_MAX: Int = 0
-    internal fun decode(r: ByteReader): Heartbeat {
-        return Heartbeat
-    }
+    /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+    @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+    internal fun decode(b: ByteArray, at: Int, end: Int): Heartbeat = Heartbeat
 }
 
 /** Choose the state reflection mode and period (also stored in settings.sync). */
@@ -1265,20 +1333,24 @@ public data class SetSync(
     public val periodMs: Int,
 ) : Packet {
     override val type: Int get() = 18
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(mode)
-        w.writeU16(periodMs)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 3
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, mode)
+        b.putU16(at + 1, periodMs)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 3
         /** Packet type. */
         public const val TYPE: Int = 18
         internal const val PAYLOAD_SIZE_MAX: Int = 3
-        internal fun decode(r: ByteReader): SetSync {
-            val mode = r.readU8()
-            val periodMs = r.readU16()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): SetSync {
+            val mode = b.u8(at)
+            val periodMs = b.u16(at + 1)
             return SetSync(mode, periodMs)
         }
     }
@@ -1292,12 +1364,14 @@ public class UpdateSettings(
     public val data: ByteArray,
 ) : Packet {
     override val type: Int get() = 19
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(offset)
-        w.writeU8(data.size)
-        w.writeBytes(data)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 3 + data.size
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, offset)
+        b.putU8(at + 2, data.size)
+        data.copyInto(b, at + 3)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     override fun equals(other: Any?): Boolean = other is UpdateSettings && offset == other.offset && data.contentEquals(other.data)
     override fun hashCode(): Int = 1 * offset.hashCode() + 31 * data.contentHashCode()
     override fun toString(): String = "UpdateSettings(offset=$offset, data=${data.toHex()})"
@@ -1307,11 +1381,12 @@ public class UpdateSettings(
         /** Packet type. */
         public const val TYPE: Int = 19
         internal const val PAYLOAD_SIZE_MAX: Int = 67
-        internal fun decode(r: ByteReader): UpdateSettings {
-            val offset = r.readU16()
-            val length = r.readU8()
-            if (length != r.remaining) throw LengthMismatch(length, r.remaining)
-            val data = r.readBytes(r.remaining)
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        internal fun decode(b: ByteArray, at: Int, end: Int): UpdateSettings {
+            val offset = b.u16(at)
+            val length = b.u8(at + 2)
+            if (length != end - (at + 3)) throw LengthMismatch(length, end - (at + 3))
+            val data = b.copyOfRange(at + 3, end)
             return UpdateSettings(offset, data)
         }
     }
@@ -1320,49 +1395,58 @@ public class UpdateSettings(
 /** Ask for the whole settings struct as `settings_data` chunks, followed by `ack`. */
 public data object ReadSettings : Packet {
     override val type: Int get() = 20
-    internal fun encodeTo(w: ByteWriter) {
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 0
+    @Suppress("UNUSED_PARAMETER") // no payload
+    internal fun encodeTo(b: ByteArray, at: Int) {
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     /** Encoded size in bytes. */
     public const val SIZE: Int = 0
     /** Packet type. */
     public const val TYPE: Int = 20
     internal const val PAYLOAD_SIZE_MAX: Int = 0
-    internal fun decode(r: ByteReader): ReadSettings {
-        return ReadSettings
-    }
+    /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+    @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+    internal fun decode(b: ByteArray, at: Int, end: Int): ReadSettings = ReadSettings
 }
 
 /** Save the settings to EEPROM. */
 public data object SaveSettings : Packet {
     override val type: Int get() = 21
-    internal fun encodeTo(w: ByteWriter) {
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 0
+    @Suppress("UNUSED_PARAMETER") // no payload
+    internal fun encodeTo(b: ByteArray, at: Int) {
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     /** Encoded size in bytes. */
     public const val SIZE: Int = 0
     /** Packet type. */
     public const val TYPE: Int = 21
     internal const val PAYLOAD_SIZE_MAX: Int = 0
-    internal fun decode(r: ByteReader): SaveSettings {
-        return SaveSettings
-    }
+    /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+    @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+    internal fun decode(b: ByteArray, at: Int, end: Int): SaveSettings = SaveSettings
 }
 
 /** Replace the settings with the compiled-in defaults (not saved until `save_settings`). */
 public data object LoadDefaults : Packet {
     override val type: Int get() = 22
-    internal fun encodeTo(w: ByteWriter) {
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 0
+    @Suppress("UNUSED_PARAMETER") // no payload
+    internal fun encodeTo(b: ByteArray, at: Int) {
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     /** Encoded size in bytes. */
     public const val SIZE: Int = 0
     /** Packet type. */
     public const val TYPE: Int = 22
     internal const val PAYLOAD_SIZE_MAX: Int = 0
-    internal fun decode(r: ByteReader): LoadDefaults {
-        return LoadDefaults
-    }
+    /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+    @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+    internal fun decode(b: ByteArray, at: Int, end: Int): LoadDefaults = LoadDefaults
 }
 
 /** Queue a straight movement; negative distance drives backwards. */
@@ -1375,22 +1459,26 @@ public data class MoveStraight(
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 32
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(id)
-        w.writeF32(distanceM)
-        w.writeF32(speedMps)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 10
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, id)
+        b.putF32(at + 2, distanceM)
+        b.putF32(at + 6, speedMps)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 10
         /** Packet type. */
         public const val TYPE: Int = 32
         internal const val PAYLOAD_SIZE_MAX: Int = 10
-        internal fun decode(r: ByteReader): MoveStraight {
-            val id = r.readU16()
-            val distanceM = r.readF32()
-            val speedMps = r.readF32()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): MoveStraight {
+            val id = b.u16(at)
+            val distanceM = b.f32(at + 2)
+            val speedMps = b.f32(at + 6)
             return MoveStraight(id, distanceM, speedMps)
         }
     }
@@ -1406,22 +1494,26 @@ public data class MoveRotate(
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 33
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(id)
-        w.writeF32(angleDeg)
-        w.writeF32(speedMps)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 10
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, id)
+        b.putF32(at + 2, angleDeg)
+        b.putF32(at + 6, speedMps)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 10
         /** Packet type. */
         public const val TYPE: Int = 33
         internal const val PAYLOAD_SIZE_MAX: Int = 10
-        internal fun decode(r: ByteReader): MoveRotate {
-            val id = r.readU16()
-            val angleDeg = r.readF32()
-            val speedMps = r.readF32()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): MoveRotate {
+            val id = b.u16(at)
+            val angleDeg = b.f32(at + 2)
+            val speedMps = b.f32(at + 6)
             return MoveRotate(id, angleDeg, speedMps)
         }
     }
@@ -1439,24 +1531,28 @@ public data class MoveArc(
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 34
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU16(id)
-        w.writeF32(radiusM)
-        w.writeF32(angleDeg)
-        w.writeF32(speedMps)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 14
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, id)
+        b.putF32(at + 2, radiusM)
+        b.putF32(at + 6, angleDeg)
+        b.putF32(at + 10, speedMps)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 14
         /** Packet type. */
         public const val TYPE: Int = 34
         internal const val PAYLOAD_SIZE_MAX: Int = 14
-        internal fun decode(r: ByteReader): MoveArc {
-            val id = r.readU16()
-            val radiusM = r.readF32()
-            val angleDeg = r.readF32()
-            val speedMps = r.readF32()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): MoveArc {
+            val id = b.u16(at)
+            val radiusM = b.f32(at + 2)
+            val angleDeg = b.f32(at + 6)
+            val speedMps = b.f32(at + 10)
             return MoveArc(id, radiusM, angleDeg, speedMps)
         }
     }
@@ -1468,18 +1564,22 @@ public data class Stop(
     public val immediate: Int,
 ) : Packet {
     override val type: Int get() = 35
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(immediate)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 1
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, immediate)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 1
         /** Packet type. */
         public const val TYPE: Int = 35
         internal const val PAYLOAD_SIZE_MAX: Int = 1
-        internal fun decode(r: ByteReader): Stop {
-            val immediate = r.readU8()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): Stop {
+            val immediate = b.u8(at)
             return Stop(immediate)
         }
     }
@@ -1493,20 +1593,24 @@ public data class WheelSpeeds(
     public val rightMps: Float,
 ) : Packet {
     override val type: Int get() = 36
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeF32(leftMps)
-        w.writeF32(rightMps)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 8
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putF32(at, leftMps)
+        b.putF32(at + 4, rightMps)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
         /** Packet type. */
         public const val TYPE: Int = 36
         internal const val PAYLOAD_SIZE_MAX: Int = 8
-        internal fun decode(r: ByteReader): WheelSpeeds {
-            val leftMps = r.readF32()
-            val rightMps = r.readF32()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): WheelSpeeds {
+            val leftMps = b.f32(at)
+            val rightMps = b.f32(at + 4)
             return WheelSpeeds(leftMps, rightMps)
         }
     }
@@ -1522,22 +1626,26 @@ public data class LineFollow(
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 37
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(run)
-        w.writeU8(colourMode)
-        w.writeF32(speedMps)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 6
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, run)
+        b.putU8(at + 1, colourMode)
+        b.putF32(at + 2, speedMps)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 6
         /** Packet type. */
         public const val TYPE: Int = 37
         internal const val PAYLOAD_SIZE_MAX: Int = 6
-        internal fun decode(r: ByteReader): LineFollow {
-            val run = r.readU8()
-            val colourMode = r.readU8()
-            val speedMps = r.readF32()
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): LineFollow {
+            val run = b.u8(at)
+            val colourMode = b.u8(at + 1)
+            val speedMps = b.f32(at + 2)
             return LineFollow(run, colourMode, speedMps)
         }
     }
@@ -1551,11 +1659,13 @@ public class IrSend(
     public val data: ByteArray,
 ) : Packet {
     override val type: Int get() = 38
-    internal fun encodeTo(w: ByteWriter) {
-        w.writeU8(power)
-        w.writeBytes(data)
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 1 + data.size
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, power)
+        data.copyInto(b, at + 1)
     }
-    override fun encodePayload(): ByteArray = ByteWriter(PAYLOAD_SIZE_MAX).also { encodeTo(it) }.toByteArray()
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     override fun equals(other: Any?): Boolean = other is IrSend && power == other.power && data.contentEquals(other.data)
     override fun hashCode(): Int = 1 * power.hashCode() + 31 * data.contentHashCode()
     override fun toString(): String = "IrSend(power=$power, data=${data.toHex()})"
@@ -1565,9 +1675,10 @@ public class IrSend(
         /** Packet type. */
         public const val TYPE: Int = 38
         internal const val PAYLOAD_SIZE_MAX: Int = 9
-        internal fun decode(r: ByteReader): IrSend {
-            val power = r.readU8()
-            val data = r.readBytes(r.remaining)
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        internal fun decode(b: ByteArray, at: Int, end: Int): IrSend {
+            val power = b.u8(at)
+            val data = b.copyOfRange(at + 1, end)
             return IrSend(power, data)
         }
     }
@@ -1604,32 +1715,89 @@ public val PACKET_SPECS: Map<Int, PacketSpec> = listOf(
     PacketSpec(38, "ir_send", 1, 9, false, true),
 ).associateBy { it.type }
 
-/** Decodes a payload whose length was already checked against [PACKET_SPECS]. */
-internal fun decodePayload(type: Int, r: ByteReader): Packet = when (type) {
-    1 -> Hello.decode(r)
-    2 -> StateFull.decode(r)
-    3 -> StateReduced.decode(r)
-    4 -> Ack.decode(r)
-    5 -> Error.decode(r)
-    6 -> SettingsData.decode(r)
-    7 -> DebugText.decode(r)
-    8 -> IrReceived.decode(r)
-    9 -> MovementDone.decode(r)
-    16 -> HelloRequest.decode(r)
-    17 -> Heartbeat.decode(r)
-    18 -> SetSync.decode(r)
-    19 -> UpdateSettings.decode(r)
-    20 -> ReadSettings.decode(r)
-    21 -> SaveSettings.decode(r)
-    22 -> LoadDefaults.decode(r)
-    32 -> MoveStraight.decode(r)
-    33 -> MoveRotate.decode(r)
-    34 -> MoveArc.decode(r)
-    35 -> Stop.decode(r)
-    36 -> WheelSpeeds.decode(r)
-    37 -> LineFollow.decode(r)
-    38 -> IrSend.decode(r)
+/** [PACKET_SPECS] indexed by type (0..255): one array load per frame. */
+internal val PACKET_SPEC_BY_TYPE: Array<PacketSpec?> = arrayOfNulls<PacketSpec>(256).also { a -> PACKET_SPECS.values.forEach { a[it.type] = it } }
+
+/** Decodes the payload in [b] from [at] to [end], whose length was already checked against [PACKET_SPECS]. */
+internal fun decodePacketPayload(type: Int, b: ByteArray, at: Int, end: Int): Packet = when (type) {
+    1 -> Hello.decode(b, at, end)
+    2 -> StateFull.decode(b, at, end)
+    3 -> StateReduced.decode(b, at, end)
+    4 -> Ack.decode(b, at, end)
+    5 -> Error.decode(b, at, end)
+    6 -> SettingsData.decode(b, at, end)
+    7 -> DebugText.decode(b, at, end)
+    8 -> IrReceived.decode(b, at, end)
+    9 -> MovementDone.decode(b, at, end)
+    16 -> HelloRequest.decode(b, at, end)
+    17 -> Heartbeat.decode(b, at, end)
+    18 -> SetSync.decode(b, at, end)
+    19 -> UpdateSettings.decode(b, at, end)
+    20 -> ReadSettings.decode(b, at, end)
+    21 -> SaveSettings.decode(b, at, end)
+    22 -> LoadDefaults.decode(b, at, end)
+    32 -> MoveStraight.decode(b, at, end)
+    33 -> MoveRotate.decode(b, at, end)
+    34 -> MoveArc.decode(b, at, end)
+    35 -> Stop.decode(b, at, end)
+    36 -> WheelSpeeds.decode(b, at, end)
+    37 -> LineFollow.decode(b, at, end)
+    38 -> IrSend.decode(b, at, end)
     else -> throw IllegalArgumentException("unknown packet type $type")
+}
+
+/** The encoded payload size of [p] in bytes. */
+internal fun payloadSizeOf(p: Packet): Int = when (p) {
+    is Hello -> p.payloadSize
+    is StateFull -> p.payloadSize
+    is StateReduced -> p.payloadSize
+    is Ack -> p.payloadSize
+    is Error -> p.payloadSize
+    is SettingsData -> p.payloadSize
+    is DebugText -> p.payloadSize
+    is IrReceived -> p.payloadSize
+    is MovementDone -> p.payloadSize
+    is HelloRequest -> p.payloadSize
+    is Heartbeat -> p.payloadSize
+    is SetSync -> p.payloadSize
+    is UpdateSettings -> p.payloadSize
+    is ReadSettings -> p.payloadSize
+    is SaveSettings -> p.payloadSize
+    is LoadDefaults -> p.payloadSize
+    is MoveStraight -> p.payloadSize
+    is MoveRotate -> p.payloadSize
+    is MoveArc -> p.payloadSize
+    is Stop -> p.payloadSize
+    is WheelSpeeds -> p.payloadSize
+    is LineFollow -> p.payloadSize
+    is IrSend -> p.payloadSize
+}
+
+/** Writes the payload of [p] into [b] from [at] ([payloadSizeOf] bytes): no intermediate array. */
+internal fun encodePayloadInto(p: Packet, b: ByteArray, at: Int): Unit = when (p) {
+    is Hello -> p.encodeTo(b, at)
+    is StateFull -> p.encodeTo(b, at)
+    is StateReduced -> p.encodeTo(b, at)
+    is Ack -> p.encodeTo(b, at)
+    is Error -> p.encodeTo(b, at)
+    is SettingsData -> p.encodeTo(b, at)
+    is DebugText -> p.encodeTo(b, at)
+    is IrReceived -> p.encodeTo(b, at)
+    is MovementDone -> p.encodeTo(b, at)
+    is HelloRequest -> p.encodeTo(b, at)
+    is Heartbeat -> p.encodeTo(b, at)
+    is SetSync -> p.encodeTo(b, at)
+    is UpdateSettings -> p.encodeTo(b, at)
+    is ReadSettings -> p.encodeTo(b, at)
+    is SaveSettings -> p.encodeTo(b, at)
+    is LoadDefaults -> p.encodeTo(b, at)
+    is MoveStraight -> p.encodeTo(b, at)
+    is MoveRotate -> p.encodeTo(b, at)
+    is MoveArc -> p.encodeTo(b, at)
+    is Stop -> p.encodeTo(b, at)
+    is WheelSpeeds -> p.encodeTo(b, at)
+    is LineFollow -> p.encodeTo(b, at)
+    is IrSend -> p.encodeTo(b, at)
 }
 
 /** The wire type of a settings leaf. */

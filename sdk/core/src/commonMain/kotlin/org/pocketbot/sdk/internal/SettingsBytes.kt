@@ -1,16 +1,18 @@
 package org.pocketbot.sdk.internal
 
-import org.pocketbot.protocol.ByteReader
-import org.pocketbot.protocol.ByteWriter
+import org.pocketbot.protocol.LengthMismatch
 import org.pocketbot.protocol.FieldType
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.SETTINGS_DEFAULTS
 import org.pocketbot.protocol.Settings
 import org.pocketbot.protocol.SettingsFieldInfo
 
-internal fun Settings.toBytes(): ByteArray = ByteWriter(ProtocolInfo.SETTINGS_SIZE).also { encodeTo(it) }.toByteArray()
+internal fun Settings.toBytes(): ByteArray = ByteArray(ProtocolInfo.SETTINGS_SIZE).also { encodeTo(it, 0) }
 
-internal fun settingsOf(bytes: ByteArray): Settings = Settings.decode(ByteReader(bytes, 0, ProtocolInfo.SETTINGS_SIZE))
+internal fun settingsOf(bytes: ByteArray): Settings {
+    if (bytes.size < ProtocolInfo.SETTINGS_SIZE) throw LengthMismatch(ProtocolInfo.SETTINGS_SIZE, bytes.size)
+    return Settings.decode(bytes, 0)
+}
 
 internal val DEFAULT_SETTINGS_BYTES: ByteArray = SETTINGS_DEFAULTS.toBytes()
 

@@ -75,6 +75,19 @@ class ApiDumpTest {
         Regex("""(?:class|object)\s+(\w+)(?:<[^>]*>)?\s+internal\s+constructor""").findAll(sourceText).map { it.groupValues[1] }.toSet()
     }
 
+    // Internal top-level functions and properties are public static methods of the file facade (`BytesKt`), not
+    // mangled: read them from the sources too, per file, as "FacadeKt.name" (properties by their getter).
+    private val internalTopLevel by lazy {
+        sources.walkTopDown().filter { it.name.endsWith(".kt") }.flatMap { file ->
+            val facade = file.nameWithoutExtension + "Kt"
+            Regex("""(?m)^internal\s+(?:(?:inline|infix|operator|tailrec|suspend|const)\s+)*(fun|val|var)\s+(?:<[^>]*>\s*)?(?:[\w.<>?]+\.)?(\w+)""")
+                .findAll(file.readText()).map { m ->
+                    val name = m.groupValues[2]
+                    "$facade." + if (m.groupValues[1] == "fun") name else "get" + name.replaceFirstChar { it.uppercase() }
+                }
+        }.toSet()
+    }
+
     private fun isInternal(c: Class<*>): Boolean {
         var k: Class<*>? = c
         while (k != null) {
@@ -140,7 +153,10 @@ class ApiDumpTest {
             c.declaredConstructors.filter { visible(it.modifiers) && !it.isSynthetic && c.simpleName !in internalConstructors }.forEach { k: Constructor<*> ->
                 members += "${mods(k.modifiers)} fun <init> (${k.parameterTypes.joinToString("") { desc(it) }})V"
             }
-            c.declaredMethods.filter { visible(it.modifiers) && !it.isSynthetic && !it.isBridge && '$' !in it.name }.forEach { m: Method ->
+            c.declaredMethods.filter {
+                visible(it.modifiers) && !it.isSynthetic && !it.isBridge && '$' !in it.name &&
+                    "${c.simpleName}.${it.name}" !in internalTopLevel
+            }.forEach { m: Method ->
                 members += "${mods(m.modifiers, c.isInterface)} fun ${m.name} (${m.parameterTypes.joinToString("") { desc(it) }})${desc(m.returnType)}"
             }
             c.declaredFields.filter { visible(it.modifiers) && !it.isSynthetic && '$' !in it.name }.forEach { f: Field ->
