@@ -97,6 +97,10 @@ static uint32_t tick_max, worst_tick;
 static uint32_t isr_max;
 static uint32_t enc_t[2];
 
+/* Host and IR traffic of a scenario: none, what the links can physically carry, or every tick (stress). */
+enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS };
+#define IR_MESSAGE_MS 42u
+
 /* One millisecond: scheduler interrupts in 100 us steps, encoder edges, then the tick, each task timed. */
 static void one_tick(uint8_t moving, uint8_t chatter)
 {
@@ -115,12 +119,17 @@ static void one_tick(uint8_t moving, uint8_t chatter)
                 encoder_capture_isr(w, enc_t[w]);
             }
     }
-    if (chatter) { /* two IR messages heard and a heartbeat from the host every tick */
+    if (chatter) { /* IR messages heard and a heartbeat from the host every tick */
+        /* A message with a 4-byte payload is about 10 bytes at 2400 Bd (42 ms) on the IR link, so a receiver can
+         * hear one every 42 ms at most; CHATTER_STRESS delivers one to each receiver every tick regardless. */
+        uint32_t ms = bench_us / 1000u;
         hal_ir_msg_t m = {7, 2, 50, 4, {1, 2, 3, 4, 0, 0, 0, 0}};
         m.data[0] = (uint8_t)bench_us;
-        ir_rx_isr(0, &m);
+        if (chatter == CHATTER_STRESS || ms % IR_MESSAGE_MS == 0)
+            ir_rx_isr(0, &m);
         m.power = 25;
-        ir_rx_isr(1, &m);
+        if (chatter == CHATTER_STRESS || ms % IR_MESSAGE_MS == IR_MESSAGE_MS / 2)
+            ir_rx_isr(1, &m);
         static const uint8_t hb[] = {0xC0, 0x11, 0x00, 0x00, 0xCF, 0xB8, 0xC0};
         for (uint8_t i = 0; i < sizeof hb; i++)
             uart_rx_isr(hb[i]);
@@ -204,23 +213,23 @@ int main(void)
     sei();
 
     settings.link.failsafe_timeout_ms = 0;
-    run(50, 0, 0);
+    run(50, 0, CHATTER_NONE);
     report("idle, full state every 100 ms");
 
     locomotion_straight(1, 10.0f, 0.15f);
-    run(400, 1, 0);
+    run(400, 1, CHATTER_NONE);
     report("movement, full state every 100 ms");
 
     line_follower_command(1, PB_COLOUR_MODE_SEGMENTS, 0.0f);
     bench_set_line_spot(2);
-    run(400, 1, 0);
+    run(400, 1, CHATTER_NONE);
     report("line following, full state every 100 ms");
 
     locomotion_teleop(0.1f, -0.1f);
     settings.sync.mode = PB_SYNC_MODE_REDUCED;
     settings.sync.period_ms = 5;
-    run(400, 1, 1);
-    report("teleoperation, reduced state every 5 ms, IR payloads and a host packet every tick");
+    run(400, 1, CHATTER_LINKS);
+    report("teleoperation, reduced state every 5 ms, a host packet every tick, IR payloads at the IR link's rate");
     uint32_t realistic = worst_tick;
 
     settings.debug.level = 4;
@@ -228,8 +237,8 @@ int main(void)
     settings.sync.period_ms = 1;
     locomotion_straight(2, 10.0f, 0.15f);
     locomotion_straight(3, 10.0f, 0.15f);
-    run(300, 1, 1);
-    report("stress: movement start, full state EVERY tick, IR payloads, host packets, debug level 4");
+    run(300, 1, CHATTER_STRESS);
+    report("stress: movement start, full state EVERY tick, IR payloads and host packets every tick, debug level 4");
 
     out_s("BENCH: scheduler interrupts (line sensor phases, beacons), worst: ");
     out_u(isr_max, 1);
