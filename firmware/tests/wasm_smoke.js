@@ -12,12 +12,12 @@ const exportsWanted = ['memory', 'sim_init', 'sim_advance', 'sim_encoder_edge', 
 const exportsHave = WebAssembly.Module.exports(mod).map(e => e.name).sort();
 check(JSON.stringify(exportsHave) === JSON.stringify(exportsWanted.slice().sort()), 'exports ' + exportsHave);
 const importsHave = WebAssembly.Module.imports(mod).map(i => i.module + '.' + i.name).sort();
-check(JSON.stringify(importsHave) === JSON.stringify(['env.ir_send', 'env.line_adc', 'env.sensor_read']),
+check(JSON.stringify(importsHave) === JSON.stringify(['env.ir_send', 'env.line_adc_sweep', 'env.sensor_read']),
   'imports ' + importsHave);
 
 const ir = [];
 const inst = new WebAssembly.Instance(mod, { env: {
-  line_adc: (d, e) => 300 + (e ? 100 : 0),
+  line_adc_sweep: e => BigInt.asIntN(64, 0x0001000100010001n * BigInt(300 + (e ? 100 : 0))),
   sensor_read: s => (s === 0 ? 3700 : 100),
   ir_send: (...a) => ir.push(a) } });
 const x = inst.exports;

@@ -130,10 +130,8 @@ static int spot_on_line(int spot)
     return fabs(sy - world.line_y) <= world.line_width / 2.0;
 }
 
-int32_t line_adc(int32_t detector, int32_t emitters)
+static int32_t detector_adc(int32_t detector, int32_t emitters)
 {
-    if (emitters >= 0 && emitters < 32)
-        world.emitter_masks_seen |= 1 << emitters;
     int32_t v = world.ambient;
     for (int k = 0; k < 2; k++) {
         int emitter = detector + k;
@@ -142,6 +140,16 @@ int32_t line_adc(int32_t detector, int32_t emitters)
             v += spot_on_line(spot) ? 2000 : 100;
     }
     return v > 4095 ? 4095 : v;
+}
+
+int64_t line_adc_sweep(int32_t emitters)
+{
+    if (emitters >= 0 && emitters < 32)
+        world.emitter_masks_seen |= 1 << emitters;
+    uint64_t sweep = 0;
+    for (int32_t d = 0; d < 4; d++)
+        sweep |= (uint64_t)(uint16_t)detector_adc(d, emitters) << (16 * d);
+    return (int64_t)sweep;
 }
 
 int32_t sensor_read(int32_t sensor)

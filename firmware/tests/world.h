@@ -1,7 +1,7 @@
 /**
  * \file world.h
  * A small physical world for host tests and the fuzzer: it implements the emulator's imports of
- * sim_abi.h (line_adc, sensor_read, ir_send), simulates two motors with first-order dynamics and a dead
+ * sim_abi.h (line_adc_sweep, sensor_read, ir_send), simulates two motors with first-order dynamics and a dead
  * band, single-channel encoders with unequal stripes, a robot pose, a line on the floor, and a host link.
  */
 #ifndef WORLD_H
@@ -37,7 +37,7 @@ typedef struct {
     /* IR messages the robot sent */
     struct { int sender, led, power, len; uint32_t lo, hi; } ir[WORLD_MAX_IR];
     int ir_count;
-    int emitter_masks_seen; /* bit m set when line_adc saw emitter mask m (m < 32) */
+    int emitter_masks_seen; /* bit m set when line_adc_sweep saw emitter mask m (m < 32) */
     int64_t now;
     int link_bytes_per_ms; /* how fast the host drains the link */
 } world_t;

@@ -113,9 +113,10 @@ void hal_line_emitters(uint8_t mask)
 
 void hal_line_convert(void)
 {
+    uint64_t sweep = (uint64_t)line_adc_sweep(outputs.line_emitters);
     for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++) {
-        int32_t v = line_adc(d, outputs.line_emitters);
-        line_result[d] = (uint16_t)(v < 0 ? 0 : v > 4095 ? 4095 : v);
+        uint16_t v = (uint16_t)(sweep >> (16 * d));
+        line_result[d] = v > 4095 ? 4095 : v;
     }
 }
 

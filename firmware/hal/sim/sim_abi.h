@@ -58,10 +58,11 @@ typedef struct __attribute__((packed)) {
 
 /* ---- imports: provided by the emulator (module "env") --------------------------------------- */
 
-/** Line sensor detector `detector` (0..3, left to right) read now with the emitters in `emitters`
- *  (bit e = emitter e, 0..4) lit; 12-bit ADC result 0..4095. Detector d sits between emitters d and
- *  d+1: spot 2d is lit by emitter d, spot 2d+1 by emitter d+1. */
-SIM_IMPORT(line_adc) int32_t line_adc(int32_t detector, int32_t emitters);
+/** One sweep of the line sensor ADC: the four detectors (0..3, left to right) read now with the
+ *  emitters in `emitters` (bit e = emitter e, 0..4) lit; detector d's 12-bit result (0..4095) is in
+ *  bits 16d..16d+15 of the return value (one host call per conversion instead of one per detector).
+ *  Detector d sits between emitters d and d+1: spot 2d is lit by emitter d, spot 2d+1 by emitter d+1. */
+SIM_IMPORT(line_adc_sweep) int64_t line_adc_sweep(int32_t emitters);
 
 /** Other sensors, read now, in physical units. */
 enum sim_sensor {

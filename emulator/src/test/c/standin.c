@@ -9,7 +9,7 @@
 #define EXPORT(name) __attribute__((export_name(#name)))
 #define IMPORT(name) __attribute__((import_module("env"), import_name(#name)))
 
-IMPORT(line_adc) int32_t line_adc(int32_t detector, int32_t emitters);
+IMPORT(line_adc_sweep) int64_t line_adc_sweep(int32_t emitters);
 IMPORT(sensor_read) int32_t sensor_read(int32_t sensor);
 IMPORT(ir_send) void ir_send(int32_t id, int32_t led, int32_t power, int32_t len, int32_t lo, int32_t hi);
 
@@ -50,7 +50,8 @@ EXPORT(sim_init) void sim_init(int32_t robot_id) {
 
 EXPORT(sim_advance) void sim_advance(int64_t now) {
     while (next_tick <= now) {
-        for (int d = 0; d < 4; d++) state.adc[d] = line_adc(d, 3 << d);
+        for (int d = 0; d < 4; d++)
+            state.adc[d] = (int32_t)(((uint64_t)line_adc_sweep(3 << d) >> (16 * d)) & 0xFFFF);
         state.battery_mv = sensor_read(0);
         if (next_tick >= next_beacon) {
             ir_send(state.id, 0, 100, 2, 0x1234, 0);

@@ -58,6 +58,8 @@ internal class SimRobot(
 
     // Line sensor spots, computed at most once per step when the firmware reads them.
     private val spotDark = DoubleArray(8)
+    private val spotX = DoubleArray(8)
+    private val spotY = DoubleArray(8)
     private var spotsValid = false
     private var colourValid = false
     private val colourRgb = DoubleArray(3)
@@ -250,16 +252,22 @@ internal class SimRobot(
 
     // ---- FirmwareHost: the firmware reads its sensors and sends IR --------------------------------------------
 
-    override fun lineAdc(detector: Int, emitters: Int): Int {
-        if (detector !in 0..3) return 0
-        if (!spotsValid) computeSpots()
-        var v = world.ambientAdc.toDouble()
+    override fun lineAdcSweep(emitters: Int): Long {
+        val lit = emitters and 0x1F
+        if (lit != 0 && !spotsValid) computeSpots()
+        val ambient = world.ambientAdc.toDouble()
         val white = params.lineSignalWhiteAdc
         val span = params.lineSignalBlackAdc - white
-        if (emitters and (1 shl detector) != 0) v += white + span * spotDark[2 * detector]
-        if (emitters and (1 shl (detector + 1)) != 0) v += white + span * spotDark[2 * detector + 1]
-        if (noise.sensorNoise) v += gauss() * params.lineNoiseAdc
-        return v.toInt().coerceIn(0, 4095)
+        val noisy = noise.sensorNoise
+        var sweep = 0L
+        for (d in 0 until 4) {
+            var v = ambient
+            if (lit and (1 shl d) != 0) v += white + span * spotDark[2 * d]
+            if (lit and (1 shl (d + 1)) != 0) v += white + span * spotDark[2 * d + 1]
+            if (noisy) v += gauss() * params.lineNoiseAdc
+            sweep = sweep or (v.toInt().coerceIn(0, 4095).toLong() shl (16 * d))
+        }
+        return sweep
     }
 
     private fun computeSpots() {
@@ -267,8 +275,10 @@ internal class SimRobot(
         val a = params.lineSensorAheadM
         for (j in 0 until 8) {
             val lat = (3.5 - j) * params.lineSpotPitchM // spot 0 is the leftmost (+y in the robot frame)
-            spotDark[j] = world.surface.irDarkness(x + a * c - lat * s, y + a * s + lat * c, params.lineSpotRadiusM)
+            spotX[j] = x + a * c - lat * s
+            spotY[j] = y + a * s + lat * c
         }
+        world.surface.irDarknessSpots(spotX, spotY, 8, params.lineSpotRadiusM, spotDark)
         spotsValid = true
     }
 

@@ -100,15 +100,21 @@ internal class SimWorld(val spec: World) {
     private val gridCell = 0.16
     private var cellHead = IntArray(1)
     private var next = IntArray(0)
+    // Robot positions at the step's end (kept up to date by separateRobots' shoves), flat for the serial part.
+    private var posX = DoubleArray(0)
+    private var posY = DoubleArray(0)
 
     private fun buildGrid() {
         gridCols = max(1, ceil(spec.widthM / gridCell).toInt())
         gridRows = max(1, ceil(spec.heightM / gridCell).toInt())
         if (cellHead.size != gridCols * gridRows) cellHead = IntArray(gridCols * gridRows)
         cellHead.fill(-1)
-        if (next.size < robots.size) next = IntArray(robots.size)
+        if (next.size < robots.size) { next = IntArray(robots.size); posX = DoubleArray(robots.size); posY = DoubleArray(robots.size) }
         for (i in robots.indices) {
-            val c = cellOf(robots[i].x, robots[i].y)
+            val r = robots[i]
+            val x = r.x; val y = r.y
+            posX[i] = x; posY[i] = y
+            val c = cellOf(x, y)
             next[i] = cellHead[c]; cellHead[c] = i
         }
     }
@@ -215,21 +221,22 @@ internal class SimWorld(val spec: World) {
     fun separateRobots() {
         if (robots.size < 2) return
         val reach = robots[0].params.lengthM * 1.2
+        val px = posX; val py = posY
         for (ia in robots.indices) {
-            val a = robots[ia]
-            val cx0 = (a.x / gridCell).toInt().coerceIn(0, gridCols - 1)
-            val cy0 = (a.y / gridCell).toInt().coerceIn(0, gridRows - 1)
+            val cx0 = (px[ia] / gridCell).toInt().coerceIn(0, gridCols - 1)
+            val cy0 = (py[ia] / gridCell).toInt().coerceIn(0, gridRows - 1)
             for (gy in max(0, cy0 - 1)..min(gridRows - 1, cy0 + 1)) for (gx in max(0, cx0 - 1)..min(gridCols - 1, cx0 + 1)) {
                 var ib = cellHead[gy * gridCols + gx]
                 while (ib >= 0) {
-                    val b = robots[ib]
                     val nb = next[ib]
-                    if (ib > ia && abs(a.x - b.x) < reach && abs(a.y - b.y) < reach) {
+                    if (ib > ia && abs(px[ia] - px[ib]) < reach && abs(py[ia] - py[ib]) < reach) {
+                        val a = robots[ia]; val b = robots[ib]
                         a.body(bodyA); b.body(bodyB)
                         if (bodyA.overlap(bodyB, overlapOut)) {
                             val d = overlapOut[0] / 2
                             a.shove(overlapOut[1] * d, overlapOut[2] * d)
                             b.shove(-overlapOut[1] * d, -overlapOut[2] * d)
+                            px[ia] = a.x; py[ia] = a.y; px[ib] = b.x; py[ib] = b.y
                         }
                     }
                     ib = nb

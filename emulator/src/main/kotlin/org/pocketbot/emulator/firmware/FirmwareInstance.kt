@@ -11,8 +11,11 @@ import com.dylibso.chicory.wasm.types.ValType
 
 /** What the firmware imports (module "env" of firmware/hal/sim/sim_abi.h), answered by the simulated robot. */
 public interface FirmwareHost {
-    /** Line sensor detector (0..3) read now with the emitters in the bit mask lit; 0..4095. */
-    public fun lineAdc(detector: Int, emitters: Int): Int
+    /**
+     * One line sensor ADC sweep: the four detectors (0..3) read now with the emitters in the bit mask lit,
+     * each 0..4095, detector d in bits 16d..16d+15 (sim_abi.h line_adc_sweep).
+     */
+    public fun lineAdcSweep(emitters: Int): Long
 
     /** One of the [SimSensor] values, in its physical unit. */
     public fun sensorRead(sensor: Int): Int
@@ -64,8 +67,8 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
         val i64 = ValType.I64
         val imports = ImportValues.builder()
             .addFunction(
-                HostFunction("env", "line_adc", FunctionType.of(listOf(i32, i32), listOf(i32))) { _, args ->
-                    longArrayOf(host.lineAdc(args[0].toInt(), args[1].toInt()).toLong())
+                HostFunction("env", "line_adc_sweep", FunctionType.of(listOf(i32), listOf(i64))) { _, args ->
+                    longArrayOf(host.lineAdcSweep(args[0].toInt()))
                 },
                 HostFunction("env", "sensor_read", FunctionType.of(listOf(i32), listOf(i32))) { _, args ->
                     longArrayOf(host.sensorRead(args[0].toInt()).toLong())
