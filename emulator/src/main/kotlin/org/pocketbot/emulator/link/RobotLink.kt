@@ -26,21 +26,11 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
     private val fromHost = ConcurrentLinkedQueue<ByteArray>()
     @Volatile private var connection: LinkConnection? = null
 
-    // Host -> robot bytes scheduled in simulated time (ring buffer, times non-decreasing).
-    private var rxTimes = LongArray(4096)
-    private var rxBytes = ByteArray(4096)
-    private var rxHead = 0
-    private var rxCount = 0
-    private var rxLineFree = 0L
-    private var rxLastArrival = 0L
+    /** Host -> robot bytes scheduled in simulated time. */
+    private val toRobot = TimedBytes(4096)
 
-    // Robot -> host bytes in flight.
-    private var txTimes = LongArray(1024)
-    private var txBytes = ByteArray(1024)
-    private var txHead = 0
-    private var txCount = 0
-    private var txLineFree = 0L
-    private var txLastArrival = 0L
+    /** Robot -> host bytes in flight. */
+    private val toHost = TimedBytes(1024)
     private var txCredit = 0.0
 
     /** Bytes the robot sent and the link delivered to a host, and bytes dropped by the model (for tests). */
@@ -101,37 +91,14 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
         while (true) {
             val chunk = fromHost.poll() ?: break
             if (!s.connected) continue
-            for (b in chunk) {
-                rxLineFree = maxOf(rxLineFree, now) + bt
-                if (s.lossRate > 0 && rng.nextDouble() < s.lossRate) { bytesLost++; continue }
-                var v = b.toInt() and 0xff
-                if (s.corruptionRate > 0 && rng.nextDouble() < s.corruptionRate) { v = v xor (1 shl rng.nextInt(8)); bytesCorrupted++ }
-                val arrival = maxOf(rxLastArrival, rxLineFree + delayTicks(s))
-                rxLastArrival = arrival
-                pushRx(arrival, v.toByte())
-            }
+            for (b in chunk) transmit(toRobot, b.toInt() and 0xff, now, s, bt)
         }
-    }
-
-    private fun pushRx(time: Long, b: Byte) {
-        if (rxCount == rxTimes.size) {
-            val n = rxTimes.size * 2
-            val t = LongArray(n); val y = ByteArray(n)
-            for (i in 0 until rxCount) { t[i] = rxTimes[(rxHead + i) % rxTimes.size]; y[i] = rxBytes[(rxHead + i) % rxTimes.size] }
-            rxTimes = t; rxBytes = y; rxHead = 0
-        }
-        val i = (rxHead + rxCount) % rxTimes.size
-        rxTimes[i] = time; rxBytes[i] = b; rxCount++
     }
 
     /** Time of the next host byte due at the robot, or Long.MAX_VALUE. */
-    internal fun nextRxTime(): Long = if (rxCount == 0) Long.MAX_VALUE else rxTimes[rxHead]
+    internal fun nextRxTime(): Long = toRobot.nextTime()
 
-    internal fun popRx(): Int {
-        val b = rxBytes[rxHead].toInt() and 0xff
-        rxHead = (rxHead + 1) % rxTimes.size; rxCount--
-        return b
-    }
+    internal fun popRx(): Int = toRobot.pop()
 
     /** How many bytes the UART may take from the firmware in a step of [stepTicks] at the link's baud rate. */
     internal fun txAllowance(stepTicks: Long): Int {
@@ -139,38 +106,31 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
         return txCredit.toInt()
     }
 
-    /** The firmware handed [n] bytes (at [address] in [mem]) to the UART at [now]. */
+    /** The firmware handed the first [n] bytes of [buffer] to the UART at [now]. */
     internal fun robotSent(buffer: ByteArray, n: Int, now: Long) {
         txCredit -= n
         val s = settings
         if (!s.connected || connection == null) return
         val bt = byteTicks()
-        for (k in 0 until n) {
-            txLineFree = maxOf(txLineFree, now) + bt
-            if (s.lossRate > 0 && rng.nextDouble() < s.lossRate) { bytesLost++; continue }
-            var v = buffer[k].toInt() and 0xff
-            if (s.corruptionRate > 0 && rng.nextDouble() < s.corruptionRate) { v = v xor (1 shl rng.nextInt(8)); bytesCorrupted++ }
-            val arrival = maxOf(txLastArrival, txLineFree + delayTicks(s))
-            txLastArrival = arrival
-            if (txCount == txTimes.size) {
-                val m = txTimes.size * 2
-                val t = LongArray(m); val y = ByteArray(m)
-                for (i in 0 until txCount) { t[i] = txTimes[(txHead + i) % txTimes.size]; y[i] = txBytes[(txHead + i) % txTimes.size] }
-                txTimes = t; txBytes = y; txHead = 0
-            }
-            val i = (txHead + txCount) % txTimes.size
-            txTimes[i] = arrival; txBytes[i] = v.toByte(); txCount++
-        }
+        for (k in 0 until n) transmit(toHost, buffer[k].toInt() and 0xff, now, s, bt)
+    }
+
+    /** Puts one byte on [line] at [now]: the baud rate, then the fault model (loss, corruption, latency). */
+    private fun transmit(line: TimedBytes, byte: Int, now: Long, s: LinkSettings, byteTicks: Long) {
+        line.lineFree = maxOf(line.lineFree, now) + byteTicks
+        if (s.lossRate > 0 && rng.nextDouble() < s.lossRate) { bytesLost++; return }
+        var v = byte
+        if (s.corruptionRate > 0 && rng.nextDouble() < s.corruptionRate) { v = v xor (1 shl rng.nextInt(8)); bytesCorrupted++ }
+        // Bytes never overtake each other, whatever the jitter.
+        val arrival = maxOf(line.lastArrival, line.lineFree + delayTicks(s))
+        line.lastArrival = arrival
+        line.push(arrival, v.toByte())
     }
 
     /** Hands the host every byte that has arrived by [now]. */
     internal fun deliverToHost(now: Long) {
-        if (txCount == 0 || txTimes[txHead] > now) return
-        var n = 0
-        while (n < txCount && txTimes[(txHead + n) % txTimes.size] <= now) n++
-        val out = ByteArray(n)
-        for (k in 0 until n) { out[k] = txBytes[txHead]; txHead = (txHead + 1) % txTimes.size }
-        txCount -= n
+        val out = toHost.popUntil(now) ?: return
+        val n = out.size
         bytesToHost += n
         synchronized(hostBytesCrc) { hostBytesCrc.update(out) }
         connection?.onBytes(out)
@@ -178,5 +138,45 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
 
     internal companion object {
         const val MAX_TAKE = 256
+    }
+}
+
+/** One direction of a link: bytes with their arrival times (non-decreasing), in a growable ring. */
+private class TimedBytes(capacity: Int) {
+    private var times = LongArray(capacity)
+    private var bytes = ByteArray(capacity)
+    private var head = 0
+    private var count = 0
+
+    /** When the line has finished sending what it was handed so far, and when its last byte arrives. */
+    var lineFree = 0L
+    var lastArrival = 0L
+
+    fun push(time: Long, b: Byte) {
+        if (count == times.size) {
+            val n = times.size * 2
+            val t = LongArray(n); val y = ByteArray(n)
+            for (i in 0 until count) { t[i] = times[(head + i) % times.size]; y[i] = bytes[(head + i) % times.size] }
+            times = t; bytes = y; head = 0
+        }
+        val i = (head + count) % times.size
+        times[i] = time; bytes[i] = b; count++
+    }
+
+    /** Arrival time of the oldest byte, or Long.MAX_VALUE when empty. */
+    fun nextTime(): Long = if (count == 0) Long.MAX_VALUE else times[head]
+
+    fun pop(): Int {
+        val b = bytes[head].toInt() and 0xff
+        head = (head + 1) % times.size; count--
+        return b
+    }
+
+    /** Every byte that has arrived by [now], oldest first, or null when none has. */
+    fun popUntil(now: Long): ByteArray? {
+        if (nextTime() > now) return null
+        var n = 0
+        while (n < count && times[(head + n) % times.size] <= now) n++
+        return ByteArray(n) { pop().toByte() }
     }
 }
