@@ -4,8 +4,10 @@
  * simavr (clk/1 Timer1 read between the tasks), as a share of the 32,000-cycle budget of a 1 ms tick at 32 MHz.
  * A tick is the time from before the first task to after the last: the tasks and the few cycles per task of
  * the timer reads, nothing of the bookkeeping.
- * Scenarios: idle; a movement with encoder pulses, a full state packet every tick, IR messages heard and
- * debug text at level 4; line following; teleoperation. Output goes out on UART0 (simavr prints it).
+ * Scenarios: idle; a movement; line following; teleoperation with a host packet every tick and IR payloads;
+ * the track behaviour (thesis A.3) following a robot close ahead while token hand-overs and greetings arrive,
+ * then driving round an obstacle; and a stress scenario (full state EVERY tick, IR and host packets every tick,
+ * debug text at level 4). Output goes out on UART0 (simavr prints it).
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
@@ -14,8 +16,10 @@
 
 #include "app.h"
 #include "bench.h"
-#include "drivers/encoder.h"
+#include "core/data.h"
+#include "core/scheduler.h"
 #include "drivers/eeprom.h"
+#include "drivers/encoder.h"
 #include "drivers/line_sensor.h"
 #include "drivers/sensors.h"
 #include "drivers/uart.h"
@@ -26,12 +30,12 @@
 #include "modules/locomotion.h"
 #include "modules/proximity.h"
 #include "modules/reflector.h"
-#include "modules/scheduler.h"
 #include "modules/settings.h"
 #include "modules/speed.h"
+#include "modules/track.h"
 
 #define BUDGET 32000ul
-#define TASKS 10
+#define TASKS 11
 
 static volatile uint16_t ovf;
 ISR(TIMER1_OVF_vect) { ovf++; }
@@ -84,12 +88,13 @@ static void out_pct(uint32_t c)
 }
 
 typedef void (*task_t)(void);
-static const char *const names[TASKS] = {"speed", "line_sensor", "sensors", "proximity", "comm",
-                                          "failsafe", "line_follower", "locomotion", "eeprom", "reflector"};
+static const char *const names[TASKS] = {"speed", "line_sensor", "sensors", "proximity", "comm", "failsafe",
+                                          "line_follower", "track", "locomotion", "eeprom", "reflector"};
 static const task_t tasks[TASKS] = {speed_task, line_sensor_task, sensors_task, proximity_task, comm_task,
-                                    failsafe_task, line_follower_task, locomotion_task, eeprom_task,
+                                    failsafe_task, line_follower_task, track_task, locomotion_task, eeprom_task,
                                     reflector_task};
 static uint32_t task_max[TASKS];
+static uint16_t task_in_worst[TASKS]; /* each task's share of the worst tick */
 static uint32_t task_sum[TASKS];
 static uint16_t task_n;
 static uint32_t tick_sum;
@@ -97,8 +102,9 @@ static uint32_t tick_max, worst_tick;
 static uint32_t isr_max;
 static uint32_t enc_t[2];
 
-/* Host and IR traffic of a scenario: none, what the links can physically carry, or every tick (stress). */
-enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS };
+/* Host and IR traffic of a scenario: none, what the links can physically carry, or every tick (stress); or the
+ * IR of the track behaviour: another robot's beacons and messages, or our own beacon reflected (an obstacle). */
+enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS, CHATTER_TRACK, CHATTER_OBSTACLE };
 #define IR_MESSAGE_MS 42u
 
 /* One millisecond: scheduler interrupts in 100 us steps, encoder edges, then the tick, each task timed. */
@@ -119,7 +125,28 @@ static void one_tick(uint8_t moving, uint8_t chatter)
                 encoder_capture_isr(w, enc_t[w]);
             }
     }
-    if (chatter) { /* IR messages heard and a heartbeat from the host every tick */
+    if (chatter == CHATTER_TRACK || chatter == CHATTER_OBSTACLE) {
+        /* At the IR link's rate: robot 7 close ahead (its rear LED at 50 %) with a token hand-over for us (a new
+         * hop every 8th message: taken, answered) and robot 8 behind greeting us; or our own reflection. */
+        uint32_t ms = bench_us / 1000u;
+        uint8_t me = settings.identity.robot_id;
+        if (chatter == CHATTER_OBSTACLE) {
+            hal_ir_msg_t own = {me, 0, 100, 0, {0}};
+            if (ms % IR_MESSAGE_MS == 0)
+                ir_rx_isr(0, &own);
+        } else if (ms % IR_MESSAGE_MS == 0) {
+            hal_ir_msg_t ahead = {7, 2, 50, 0, {0}};
+            if ((ms / IR_MESSAGE_MS) % 2u) {
+                uint8_t hop = (uint8_t)(ms / (8u * IR_MESSAGE_MS));
+                hal_ir_msg_t token = {7, 2, 100, TRACK_MSG_LEN, {TRACK_MSG_TOKEN, me, hop}};
+                ahead = token;
+            }
+            ir_rx_isr(0, &ahead);
+        } else if (ms % IR_MESSAGE_MS == IR_MESSAGE_MS / 2) {
+            hal_ir_msg_t greet = {8, 0, 100, TRACK_MSG_LEN, {TRACK_MSG_GREET, me, 0}};
+            ir_rx_isr(1, &greet);
+        }
+    } else if (chatter) { /* IR messages heard and a heartbeat from the host every tick */
         /* A message with a 4-byte payload is about 10 bytes at 2400 Bd (42 ms) on the IR link, so a receiver can
          * hear one every 42 ms at most; CHATTER_STRESS delivers one to each receiver every tick regardless. */
         uint32_t ms = bench_us / 1000u;
@@ -154,8 +181,11 @@ static void one_tick(uint8_t moving, uint8_t chatter)
     }
     task_n++;
     uint16_t total = (uint16_t)(stamp[TASKS] - stamp[0]); /* a tick is far below 65536 cycles */
-    if (total > tick_max)
+    if (total > tick_max) {
         tick_max = total;
+        for (uint8_t i = 0; i < TASKS; i++)
+            task_in_worst[i] = (uint16_t)(stamp[i + 1] - stamp[i]);
+    }
     tick_sum += total;
     /* Drain the link as a 115200 Bd UART would (12 bytes per ms), keeping room for packets. */
     for (uint8_t i = 0; i < 12; i++)
@@ -175,7 +205,7 @@ static void report(const char *scenario)
     out_s(" cycles =");
     out_pct(tick_sum / task_n);
     out_s("\n");
-    out_s("BENCH:   task            worst  share      mean  share\n");
+    out_s("BENCH:   task            worst  share      mean  share   in the worst tick\n");
     for (uint8_t i = 0; i < TASKS; i++) {
         out_s("BENCH:   ");
         out_s(names[i]);
@@ -185,6 +215,7 @@ static void report(const char *scenario)
         out_pct(task_max[i]);
         out_u(task_sum[i] / task_n, 9);
         out_pct(task_sum[i] / task_n);
+        out_u(task_in_worst[i], 9);
         out_s("\n");
     }
     if (tick_max > worst_tick)
@@ -216,34 +247,50 @@ int main(void)
     run(50, 0, CHATTER_NONE);
     report("idle, full state every 100 ms");
 
-    locomotion_straight(1, 10.0f, 0.15f);
+    uint16_t detail;
+    pb_move_straight_t move = {1, 10.0f, 0.15f};
+    locomotion_straight(&move, &detail);
     run(400, 1, CHATTER_NONE);
     report("movement, full state every 100 ms");
 
-    line_follower_command(1, PB_COLOUR_MODE_SEGMENTS, 0.0f);
+    pb_line_follow_t follow = {1, PB_COLOUR_MODE_SEGMENTS, 0.0f};
+    line_follower_command(&follow, &detail);
     bench_set_line_spot(2);
     run(400, 1, CHATTER_NONE);
     report("line following, full state every 100 ms");
 
-    locomotion_teleop(0.1f, -0.1f);
+    pb_wheel_speeds_t teleop = {0.1f, -0.1f};
+    locomotion_teleop(&teleop, &detail);
     settings.sync.mode = PB_SYNC_MODE_REDUCED;
     settings.sync.period_ms = 5;
     run(400, 1, CHATTER_LINKS);
     report("teleoperation, reduced state every 5 ms, a host packet every tick, IR payloads at the IR link's rate");
+
+    settings.sync.mode = PB_SYNC_MODE_FULL;
+    settings.sync.period_ms = 100;
+    track_command(PB_TRACK_ACTION_START);
+    bench_set_line_spot(3);
+    run(400, 1, CHATTER_TRACK);
+    report("track: following a robot close ahead, token hand-overs and greetings at the IR link's rate, full state every 100 ms");
+    run(150, 0, CHATTER_OBSTACLE);
+    run(250, 1, CHATTER_OBSTACLE);
+    report("track: an obstacle ahead, the detour's steps, full state every 100 ms");
     uint32_t realistic = worst_tick;
 
     settings.debug.level = 4;
     settings.sync.mode = PB_SYNC_MODE_FULL;
     settings.sync.period_ms = 1;
-    locomotion_straight(2, 10.0f, 0.15f);
-    locomotion_straight(3, 10.0f, 0.15f);
+    move.id = 2;
+    locomotion_straight(&move, &detail);
+    move.id = 3;
+    locomotion_straight(&move, &detail);
     run(300, 1, CHATTER_STRESS);
     report("stress: movement start, full state EVERY tick, IR payloads and host packets every tick, debug level 4");
 
     out_s("BENCH: scheduler interrupts (line sensor phases, beacons), worst: ");
     out_u(isr_max, 1);
     out_s(" cycles\n");
-    out_s("BENCH: WORST TICK (first four scenarios) ");
+    out_s("BENCH: WORST TICK (all but the stress scenario) ");
     out_u(realistic, 1);
     out_s(" cycles =");
     out_pct(realistic);

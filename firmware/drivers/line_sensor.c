@@ -3,11 +3,10 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "core/data.h"
+#include "core/fixed.h"
+#include "core/scheduler.h"
 #include "hal/hal.h"
-#include "modules/fixed.h"
-#include "modules/reflector.h"
-#include "modules/scheduler.h"
-#include "modules/settings.h"
 
 /* Spot lit by each detector in the two lit phases: detector d sits between emitters d and d+1, spot 2d is
  * lit by emitter d and spot 2d+1 by emitter d+1. Phase A (emitters 0, 2, 4) lights spots 0, 3, 4, 7 of
@@ -143,12 +142,26 @@ static uint16_t mean_of(sum_t n, sum_t d)
     return q;
 }
 
+/* One line under the sensor: a run of adjacent spots above the threshold. */
+typedef struct {
+    sum_t left, right; /* weights times |x| on each side of the centre, < 2^23 */
+    uint16_t w;        /* at most 8 x 1000 */
+} run_t;
+
+#define MAX_RUNS (LINE_SPOTS / 2u) /* runs need a spot below the threshold between them */
+
+static int16_t centroid(const run_t *r)
+{
+    return r->right >= r->left ? (int16_t)mean_of(r->right - r->left, r->w) : -(int16_t)mean_of(r->left - r->right, r->w);
+}
+
 uint8_t line_sensor_evaluate(const uint16_t raw[LINE_SPOTS], uint16_t dark_out[LINE_SPOTS], int16_t *position)
 {
     update_scale();
     uint16_t threshold = settings.line_sensor.threshold;
-    sum_t sum_right = 0, sum_left = 0; /* weights times |x| on each side of the centre, < 2^23 */
-    uint16_t sum_w = 0;                   /* at most 8 x 1000 */
+    run_t runs[MAX_RUNS];
+    uint8_t n = 0;   /* runs found */
+    uint8_t in_run = 0;
     for (uint8_t i = 0; i < LINE_SPOTS; i++) {
         uint16_t lo = settings.line_sensor.cal_min[i], hi = settings.line_sensor.cal_max[i];
         uint16_t d;
@@ -157,6 +170,7 @@ uint8_t line_sensor_evaluate(const uint16_t raw[LINE_SPOTS], uint16_t dark_out[L
         } else if (raw[i] >= hi) { /* also an uncalibrated spot (hi <= lo): dark above cal_min */
             d = 1000;
         } else if (!dark_out && raw[i] - lo < above[i]) { /* not above the threshold: only the task asks */
+            in_run = 0;
             continue;
         } else { /* (raw - lo) < (hi - lo), so the product stays below 1000 << 16 */
             uint16_t x = (uint16_t)(raw[i] - lo);
@@ -164,20 +178,43 @@ uint8_t line_sensor_evaluate(const uint16_t raw[LINE_SPOTS], uint16_t dark_out[L
         }
         if (dark_out)
             dark_out[i] = d;
-        if (d > threshold) {
-            uint16_t w = (uint16_t)(d - threshold);
-            int16_t x = spot_x[i];
-            sum_w = (uint16_t)(sum_w + w);
-            if (x < 0)
-                sum_left += fx_umul16(w, (uint16_t)-x);
-            else
-                sum_right += fx_umul16(w, (uint16_t)x);
+        if (d <= threshold) {
+            in_run = 0;
+            continue;
+        }
+        if (!in_run) {
+            in_run = 1;
+            run_t *r = &runs[n++];
+            r->left = r->right = 0;
+            r->w = 0;
+        }
+        run_t *r = &runs[n - 1u];
+        uint16_t w = (uint16_t)(d - threshold);
+        int16_t x = spot_x[i];
+        r->w = (uint16_t)(r->w + w);
+        if (x < 0)
+            r->left += fx_umul16(w, (uint16_t)-x);
+        else
+            r->right += fx_umul16(w, (uint16_t)x);
+    }
+    if (n == 0)
+        return 0;
+    /* Two lines (a fork, a crossing seen at an angle): follow the one nearest to where the line was, so the
+     * robot commits to one branch instead of steering between them until it loses both. */
+    int16_t best = centroid(&runs[0]);
+    if (n > 1) {
+        int16_t prev = *position;
+        uint16_t best_gap = (uint16_t)(best > prev ? best - prev : prev - best);
+        for (uint8_t k = 1; k < n; k++) {
+            int16_t p = centroid(&runs[k]);
+            uint16_t gap = (uint16_t)(p > prev ? p - prev : prev - p);
+            if (gap < best_gap) {
+                best = p;
+                best_gap = gap;
+            }
         }
     }
-    if (sum_w == 0)
-        return 0;
-    *position = sum_right >= sum_left ? (int16_t)mean_of(sum_right - sum_left, sum_w)
-                                      : -(int16_t)mean_of(sum_left - sum_right, sum_w);
+    *position = best;
     return 1;
 }
 
@@ -197,17 +234,17 @@ void line_sensor_task(void)
         spot_raw[7] = LIT_MINUS_DARK(lit_a, 3);
 #undef LIT_MINUS_DARK
         memcpy(robot_state.line.raw, spot_raw, sizeof spot_raw);
-        int16_t pos;
+        int16_t pos = robot_state.line.position; /* where the line was: the branch to keep at a fork */
         uint8_t flags = robot_state.line.flags;
         if (line_sensor_evaluate(spot_raw, NULL, &pos)) {
             robot_state.line.position = pos;
-            flags = LINE_FLAG_SEEN;
+            flags = PB_LINE_FLAG_SEEN;
             last_seen_ms = robot_state.time.time_ms;
         } else {
-            flags &= (uint8_t)~LINE_FLAG_SEEN;
+            flags &= (uint8_t)~PB_LINE_FLAG_SEEN;
         }
-        if (!(flags & LINE_FLAG_SEEN) && robot_state.time.time_ms - last_seen_ms >= settings.line_follow.lost_timeout_ms)
-            flags |= LINE_FLAG_LOST;
+        if (!(flags & PB_LINE_FLAG_SEEN) && robot_state.time.time_ms - last_seen_ms >= settings.line_follow.lost_timeout_ms)
+            flags |= PB_LINE_FLAG_LOST;
         robot_state.line.flags = flags;
     }
     if (phase == 0)

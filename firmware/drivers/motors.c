@@ -1,9 +1,8 @@
 #include "motors.h"
 
+#include "core/data.h"
 #include "drivers/encoder.h"
 #include "hal/hal.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 
 static int16_t clamp_duty(int16_t v)
 {

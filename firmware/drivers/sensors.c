@@ -1,7 +1,7 @@
 #include "sensors.h"
 
+#include "core/data.h"
 #include "hal/hal.h"
-#include "modules/reflector.h"
 
 static uint8_t group;
 

@@ -41,6 +41,17 @@ uint8_t hal_board_id(void);
 /** Waits for the next interrupt (sleep mode idle); returns at once where there is nothing to wait for. */
 void hal_idle(void);
 
+/** Called at the end of every main loop tick, before the scheduler measures how long it took. Only the
+ *  emulator's HAL (built with HAL_SIM) does something: code takes no simulated time there, and a test can
+ *  make a tick last (sim_host_stretch_tick_us()). Elsewhere it compiles to nothing. */
+#ifdef HAL_SIM
+void hal_tick_done(void);
+#else
+static inline void hal_tick_done(void)
+{
+}
+#endif
+
 /** Masks interrupts; \return the previous state for hal_irq_restore(). */
 uint8_t hal_irq_save(void);
 void hal_irq_restore(uint8_t saved);

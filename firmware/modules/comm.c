@@ -2,32 +2,38 @@
 
 #include <string.h>
 
+#include "core/data.h"
 #include "drivers/uart.h"
-#include "modules/failsafe.h"
-#include "modules/line_follower.h"
-#include "modules/locomotion.h"
-#include "modules/proximity.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 #include "protocol/pb_frame.h"
 #include "protocol/slip.h"
 
 static slip_decoder_t rx;
 static uint8_t tx_seq;
 
-/* Recently accepted commands, to re-ack a retransmission without executing it twice. */
+/* Handlers by the index of their type in pb_packet_info (registered by the modules). */
+static comm_handler_t handlers[PB_PACKET_INFO_COUNT];
+
+/* The host session served (0: none), and the acked commands it had accepted, each by its seq and the CRC of
+ * its frame (which covers type, seq, length and payload): only an identical frame is a retransmission. */
+static uint32_t session;
 static struct {
-    uint8_t type;
-    uint8_t seq;
+    uint8_t seq; /* 0: empty (acked commands never carry 0) */
+    uint16_t crc;
 } history[COMM_SEQ_HISTORY];
 static uint8_t history_next;
 
-/* A read_settings answer in progress. */
-static uint8_t reading;
-static uint8_t reading_seq;
-static uint16_t reading_offset;
+/* Offers refused because a streamed frame was still being encoded, since one last went out. */
+#define OFFER_PATIENCE 4u
+static uint8_t offer_waits;
 
-#define SETTINGS_CHUNK 64u
+/* Answers under way (read_settings and read_movements can overlap). */
+#define COMM_ANSWERS 2u
+static comm_answer_step_t answers[COMM_ANSWERS];
+static uint8_t answering; /* how many of answers[] are set */
+
+static uint32_t host_seen_ms;
+static uint32_t link_error_ms; /* when the last answer to an unreadable frame went out */
+static uint8_t link_error_sent;
 
 /* A packet sent over several ticks (comm_send_streamed()): its frame bytes are copied at once, then CRC'd
  * and SLIP-encoded into the transmit buffer COMM_STREAM_CHUNK bytes per comm_task(), each chunk published to
@@ -41,15 +47,33 @@ static struct {
     uint8_t buf[PB_FRAME_HEADER_SIZE + sizeof(pb_robot_state_t)];
 } stream;
 
+static uint8_t on_heartbeat(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_hello_request(const pb_frame_t *cmd, uint16_t *detail);
+
 void comm_init(void)
 {
     slip_decoder_init(&rx);
     pb_packet_lookup_init();
+    memset(handlers, 0, sizeof handlers);
     memset(history, 0, sizeof history);
     history_next = 0;
-    reading = 0;
+    session = 0;
     tx_seq = 0;
     stream.active = 0;
+    offer_waits = 0;
+    memset(answers, 0, sizeof answers);
+    answering = 0;
+    host_seen_ms = robot_state.time.time_ms;
+    link_error_sent = 0;
+    comm_register(PB_PKT_HEARTBEAT, on_heartbeat);
+    comm_register(PB_PKT_HELLO_REQUEST, on_hello_request);
+}
+
+void comm_register(uint8_t type, comm_handler_t handler)
+{
+    uint8_t i = pb_packet_index(type);
+    if (i != PB_PACKET_NONE)
+        handlers[i] = handler;
 }
 
 static uint8_t slip_extra(const uint8_t *p, uint8_t n)
@@ -166,24 +190,20 @@ bool comm_send_streamed(uint8_t type, const void *payload, uint8_t len)
 /* Frames and SLIP-encodes straight into the transmit buffer in one pass that also computes the CRC. Only
  * when the buffer might be too small for the worst case (every byte escaped) are the escapes counted; the
  * CRC's own are known at the end, before anything is published. */
-bool comm_send_seq(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
+static bool frame_out(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
 {
     const uint8_t *p = (const uint8_t *)payload;
     uint8_t head[PB_FRAME_HEADER_SIZE] = {type, seq, len};
     stream_step(0xFFu); /* frames never interleave: a streamed one is completed first */
     uint16_t free = uart_tx_free();
     uint16_t plain = (uint16_t)(2u + sizeof head + len + PB_FRAME_CRC_SIZE);
-    if (len > PB_MAX_PAYLOAD || plain > free) { /* too long, or no room even unescaped */
-        robot_state.errors.tx_dropped++;
+    if (len > PB_MAX_PAYLOAD || plain > free) /* too long, or no room even unescaped */
         return false;
-    }
     uint16_t need = 0; /* exact size without the CRC's escapes, when it matters */
     if ((uint16_t)(2u * plain) > free) {
         need = (uint16_t)(plain + slip_extra(head, sizeof head) + slip_extra(p, len));
-        if (need > free) {
-            robot_state.errors.tx_dropped++;
+        if (need > free)
             return false;
-        }
     }
     /* Written behind the published end of the buffer: nothing goes out until the commit. */
     uint8_t pos = uart_tx_begin();
@@ -191,15 +211,36 @@ bool comm_send_seq(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
     pos = uart_tx_store(pos, SLIP_END);
     pos = encode(pos, &crc, head, sizeof head);
     pos = encode(pos, &crc, p, len);
-    if (need && need + slip_extra((const uint8_t *)&crc, sizeof crc) > free) { /* its CRC needs escapes: no room */
-        robot_state.errors.tx_dropped++;
+    if (need && need + slip_extra((const uint8_t *)&crc, sizeof crc) > free) /* its CRC needs escapes: no room */
         return false;
-    }
     pos = store_escaped(pos, (uint8_t)crc);
     pos = store_escaped(pos, (uint8_t)(crc >> 8));
     pos = uart_tx_store(pos, SLIP_END);
     uart_tx_commit(pos);
     uart_tx_flush();
+    return true;
+}
+
+bool comm_send_seq(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
+{
+    if (frame_out(type, seq, payload, len))
+        return true;
+    robot_state.errors.tx_dropped++;
+    return false;
+}
+
+bool comm_offer(uint8_t type, const void *payload, uint8_t len)
+{
+    /* Completing a streamed frame now would put its cost into the caller's tick: wait for comm_task() to finish
+     * it, unless offers have already waited OFFER_PATIENCE times (a stream every tick never finishes). */
+    if (stream.active && offer_waits < OFFER_PATIENCE) {
+        offer_waits++;
+        return false;
+    }
+    offer_waits = 0;
+    if (!frame_out(type, tx_seq, payload, len))
+        return false;
+    tx_seq++;
     return true;
 }
 
@@ -214,7 +255,9 @@ void comm_send_error(uint8_t code, uint8_t type, uint8_t seq, uint16_t detail)
     comm_send_seq(PB_PKT_ERROR, seq, &e, sizeof e);
 }
 
-void comm_send_hello(void)
+/* In answer to a hello_request the hello carries its sequence number; at reset it carries 0, so a host can tell
+ * the two apart. */
+static void send_hello(uint8_t resumed, uint8_t seq)
 {
     pb_hello_t h;
     h.robot_id = settings.identity.robot_id;
@@ -226,7 +269,41 @@ void comm_send_hello(void)
     h.layout_hash = PB_LAYOUT_HASH;
     h.settings_size = sizeof(pb_settings_t);
     h.state_size = sizeof(pb_robot_state_t);
-    comm_send(PB_PKT_HELLO, &h, sizeof h);
+    h.session_resumed = resumed;
+    h.settings_crc = pb_crc16(0xFFFFu, (const uint8_t *)&settings, sizeof settings);
+    comm_send_seq(PB_PKT_HELLO, seq, &h, sizeof h);
+}
+
+void comm_send_hello(void)
+{
+    send_hello(0, 0);
+}
+
+uint32_t comm_host_seen_ms(void)
+{
+    return host_seen_ms;
+}
+
+static uint8_t on_heartbeat(const pb_frame_t *cmd, uint16_t *detail)
+{
+    (void)cmd;
+    (void)detail;
+    return PB_ERROR_CODE_NONE; /* its arrival is all the failsafe needs */
+}
+
+static uint8_t on_hello_request(const pb_frame_t *cmd, uint16_t *detail)
+{
+    (void)detail;
+    pb_hello_request_t r;
+    memcpy(&r, cmd->payload, sizeof r);
+    uint8_t resumed = r.session != 0 && r.session == session;
+    if (!resumed) { /* another host, or one that restarted: its sequence numbers owe nothing to the last one's */
+        session = r.session;
+        memset(history, 0, sizeof history);
+        history_next = 0;
+    }
+    send_hello(resumed, cmd->seq);
+    return PB_ERROR_CODE_NONE;
 }
 
 static void send_ack(uint8_t type, uint8_t seq)
@@ -235,103 +312,48 @@ static void send_ack(uint8_t type, uint8_t seq)
     comm_send_seq(PB_PKT_ACK, seq, &a, sizeof a);
 }
 
-static bool seen_before(uint8_t type, uint8_t seq)
+bool comm_ack(uint8_t type, uint8_t seq)
 {
-    if (seq == 0) /* hosts number acked commands from 1; 0 is never remembered */
+    pb_ack_t a = {type};
+    if (stream.active && offer_waits < OFFER_PATIENCE) { /* as comm_offer() */
+        offer_waits++;
         return false;
+    }
+    offer_waits = 0;
+    return frame_out(PB_PKT_ACK, seq, &a, sizeof a);
+}
+
+static bool seen_before(uint8_t seq, uint16_t crc)
+{
     for (uint8_t i = 0; i < COMM_SEQ_HISTORY; i++)
-        if (history[i].seq == seq && history[i].type == type)
+        if (history[i].seq == seq && history[i].crc == crc)
             return true;
     return false;
 }
 
-static void remember(uint8_t type, uint8_t seq)
+static void remember(uint8_t seq, uint16_t crc)
 {
-    if (seq == 0)
-        return;
-    history[history_next].type = type;
     history[history_next].seq = seq;
+    history[history_next].crc = crc;
     history_next = (uint8_t)((history_next + 1u) % COMM_SEQ_HISTORY);
 }
 
-/* Executes a packet whose type and length are valid. \return an error code, or NONE to ack. */
-static uint8_t execute(uint8_t type, uint8_t seq, const uint8_t *p, uint8_t len, uint16_t *detail)
+/* An unreadable frame: its type and seq cannot be trusted, so the answer names neither, and at most one such
+ * answer goes out per COMM_LINK_ERROR_INTERVAL_MS (the counters count every one). */
+static void link_error(uint8_t code, uint16_t length)
 {
-    switch (type) {
-    case PB_PKT_HELLO_REQUEST:
-        comm_send_hello();
-        return PB_ERROR_CODE_NONE;
-    case PB_PKT_HEARTBEAT:
-        return PB_ERROR_CODE_NONE;
-    case PB_PKT_SET_SYNC: {
-        pb_set_sync_t c;
-        memcpy(&c, p, sizeof c);
-        return reflector_set_sync(c.mode, c.period_ms);
-    }
-    case PB_PKT_UPDATE_SETTINGS: {
-        pb_update_settings_t c;
-        memcpy(&c, p, len);
-        if (c.length != len - PB_UPDATE_SETTINGS_MIN_SIZE) {
-            *detail = c.length;
-            return PB_ERROR_CODE_BAD_LENGTH;
-        }
-        return settings_write(c.offset, c.length, c.data, detail);
-    }
-    case PB_PKT_READ_SETTINGS:
-        reading = 1;
-        reading_seq = seq;
-        reading_offset = 0;
-        return PB_ERROR_CODE_NONE;
-    case PB_PKT_SAVE_SETTINGS:
-        return settings_save() ? PB_ERROR_CODE_NONE : PB_ERROR_CODE_BUSY;
-    case PB_PKT_LOAD_DEFAULTS:
-        settings_load_defaults();
-        return PB_ERROR_CODE_NONE;
-    case PB_PKT_MOVE_STRAIGHT: {
-        pb_move_straight_t c;
-        memcpy(&c, p, sizeof c);
-        return locomotion_straight(c.id, c.distance_m, c.speed_mps);
-    }
-    case PB_PKT_MOVE_ROTATE: {
-        pb_move_rotate_t c;
-        memcpy(&c, p, sizeof c);
-        return locomotion_rotate(c.id, c.angle_deg, c.speed_mps);
-    }
-    case PB_PKT_MOVE_ARC: {
-        pb_move_arc_t c;
-        memcpy(&c, p, sizeof c);
-        return locomotion_arc(c.id, c.radius_m, c.angle_deg, c.speed_mps);
-    }
-    case PB_PKT_STOP: {
-        pb_stop_t c;
-        memcpy(&c, p, sizeof c);
-        if (c.immediate > 1)
-            return PB_ERROR_CODE_BAD_ARGUMENT;
-        line_follower_stop();
-        locomotion_stop(c.immediate != 0);
-        return PB_ERROR_CODE_NONE;
-    }
-    case PB_PKT_WHEEL_SPEEDS: {
-        pb_wheel_speeds_t c;
-        memcpy(&c, p, sizeof c);
-        uint8_t r = locomotion_teleop(c.left_mps, c.right_mps);
-        if (r == PB_ERROR_CODE_NONE)
-            line_follower_stop();
-        return r;
-    }
-    case PB_PKT_LINE_FOLLOW: {
-        pb_line_follow_t c;
-        memcpy(&c, p, sizeof c);
-        return line_follower_command(c.run, c.colour_mode, c.speed_mps);
-    }
-    case PB_PKT_IR_SEND: {
-        pb_ir_send_t c;
-        memcpy(&c, p, len);
-        return proximity_send_payload(c.power, c.data, (uint8_t)(len - PB_IR_SEND_MIN_SIZE));
-    }
-    default:
-        return PB_ERROR_CODE_UNKNOWN_TYPE;
-    }
+    uint32_t now = robot_state.time.time_ms;
+    if (link_error_sent && now - link_error_ms < COMM_LINK_ERROR_INTERVAL_MS)
+        return;
+    link_error_sent = 1;
+    link_error_ms = now;
+    comm_send_error(code, 0, 0, length);
+}
+
+static void reject(uint8_t code, uint8_t type, uint8_t seq, uint16_t detail)
+{
+    robot_state.errors.rejected++;
+    comm_send_error(code, type, seq, detail);
 }
 
 void comm_handle_frame(const uint8_t *frame, uint16_t n)
@@ -340,83 +362,86 @@ void comm_handle_frame(const uint8_t *frame, uint16_t n)
     uint8_t code = pb_frame_check(frame, n, &f);
     if (code == PB_ERROR_CODE_BAD_CRC) {
         robot_state.errors.crc++;
+        link_error(code, n);
         return;
     }
     if (code == PB_ERROR_CODE_TOO_SHORT || code == PB_ERROR_CODE_TOO_LONG) {
         robot_state.errors.framing++;
+        link_error(code, n);
         return;
     }
-    if (code == PB_ERROR_CODE_BAD_LENGTH) { /* sound CRC, so type and seq can be trusted */
-        robot_state.errors.framing++;
-        comm_send_error(code, frame[0], frame[1], frame[2]);
+    host_seen_ms = robot_state.time.time_ms; /* a sound CRC: the host is there */
+    if (code == PB_ERROR_CODE_BAD_LENGTH) { /* the header's length disagrees with the frame */
+        reject(code, frame[0], frame[1], frame[2]);
         return;
     }
-    failsafe_host_seen();
-
-    const PB_FLASH pb_packet_info_t *info = pb_packet_lookup(f.type);
-    if (info == NULL || info->dir != PB_DIR_H2R) {
-        robot_state.errors.rejected++;
-        comm_send_error(PB_ERROR_CODE_UNKNOWN_TYPE, f.type, f.seq, f.type);
+    uint8_t index = pb_packet_index(f.type);
+    if (index == PB_PACKET_NONE || handlers[index] == NULL) { /* only host-to-robot types have handlers */
+        reject(PB_ERROR_CODE_UNKNOWN_TYPE, f.type, f.seq, f.type);
         return;
     }
+    comm_handler_t handler = handlers[index];
+    const PB_FLASH pb_packet_info_t *info = &pb_packet_info[index];
     if (f.len < info->min_size || f.len > info->max_size) {
-        robot_state.errors.rejected++;
-        comm_send_error(PB_ERROR_CODE_BAD_LENGTH, f.type, f.seq, f.len);
+        reject(PB_ERROR_CODE_BAD_LENGTH, f.type, f.seq, f.len);
         return;
     }
     bool acked = info->needs_ack != 0;
-    if (acked && f.type != PB_PKT_READ_SETTINGS && seen_before(f.type, f.seq)) {
+    bool remembered = acked && !info->idempotent;
+    uint16_t crc = (uint16_t)(frame[n - 2] | (frame[n - 1] << 8));
+    if (acked && f.seq == 0) {
+        reject(PB_ERROR_CODE_BAD_SEQUENCE, f.type, f.seq, 0);
+        return;
+    }
+    if (remembered && seen_before(f.seq, crc)) {
         send_ack(f.type, f.seq); /* a retransmission: the first one was executed */
         return;
     }
     uint16_t detail = 0;
-    code = execute(f.type, f.seq, f.payload, f.len, &detail);
-    if (code != PB_ERROR_CODE_NONE) {
-        robot_state.errors.rejected++;
-        comm_send_error(code, f.type, f.seq, detail);
+    code = handler(&f, &detail);
+    if (code != PB_ERROR_CODE_NONE && code != COMM_ANSWER_LATER) {
+        reject(code, f.type, f.seq, detail);
         return;
     }
-    if (!acked)
-        return;
-    remember(f.type, f.seq);
-    if (f.type != PB_PKT_READ_SETTINGS) /* its ack follows the data */
+    if (remembered)
+        remember(f.seq, crc);
+    if (acked && code == PB_ERROR_CODE_NONE)
         send_ack(f.type, f.seq);
 }
 
 void comm_rx_byte(uint8_t byte)
 {
     slip_result_t r = slip_decode(&rx, byte);
-    if (r == SLIP_FRAME)
+    if (r == SLIP_FRAME) {
         comm_handle_frame(rx.buf, rx.len);
-    else if (r == SLIP_ERROR)
+    } else if (r == SLIP_ERROR) {
         robot_state.errors.framing++;
+        link_error(rx.overflow ? PB_ERROR_CODE_TOO_LONG : PB_ERROR_CODE_FRAMING, slip_seen(&rx));
+    }
 }
 
-static void continue_reading(void)
+void comm_answer_later(comm_answer_step_t step)
 {
-    while (reading) {
-        if (reading_offset >= sizeof(pb_settings_t)) {
-            pb_ack_t a = {PB_PKT_READ_SETTINGS};
-            uint16_t before = robot_state.errors.tx_dropped;
-            if (!comm_send_seq(PB_PKT_ACK, reading_seq, &a, sizeof a)) {
-                robot_state.errors.tx_dropped = before; /* not lost: retried next tick */
-                return;
-            }
-            reading = 0;
+    uint8_t free_slot = COMM_ANSWERS;
+    for (uint8_t i = 0; i < COMM_ANSWERS; i++) {
+        if (answers[i] == step)
             return;
-        }
-        pb_settings_data_t d;
-        uint16_t left = (uint16_t)(sizeof(pb_settings_t) - reading_offset);
-        d.offset = reading_offset;
-        d.length = (uint8_t)(left < SETTINGS_CHUNK ? left : SETTINGS_CHUNK);
-        memcpy(d.data, (const uint8_t *)&settings + reading_offset, d.length);
-        uint16_t before = robot_state.errors.tx_dropped;
-        if (!comm_send(PB_PKT_SETTINGS_DATA, &d, (uint8_t)(PB_SETTINGS_DATA_MIN_SIZE + d.length))) {
-            robot_state.errors.tx_dropped = before;
-            return;
-        }
-        reading_offset = (uint16_t)(reading_offset + d.length);
+        if (answers[i] == NULL)
+            free_slot = i;
     }
+    if (free_slot < COMM_ANSWERS) { /* there is one per kind of answer: never full */
+        answers[free_slot] = step;
+        answering++;
+    }
+}
+
+static void continue_answers(void)
+{
+    for (uint8_t i = 0; i < COMM_ANSWERS; i++)
+        if (answers[i] != NULL && answers[i]()) {
+            answers[i] = NULL;
+            answering--;
+        }
 }
 
 void comm_task(void)
@@ -427,5 +452,6 @@ void comm_task(void)
         comm_rx_byte(b);
     robot_state.errors.rx_overflow = uart_rx_overflows();
     stream_step(COMM_STREAM_CHUNK);
-    continue_reading();
+    if (answering)
+        continue_answers();
 }

@@ -93,5 +93,5 @@ void debug_printf(uint8_t module, uint8_t level, const HAL_FLASH char *fmt, ...)
     va_start(ap, fmt);
     uint8_t n = debug_format((char *)msg.text, sizeof msg.text, fmt, ap);
     va_end(ap);
-    comm_send(PB_PKT_DEBUG_TEXT, &msg, (uint8_t)(PB_DEBUG_TEXT_MIN_SIZE + n));
+    comm_send(PB_PKT_DEBUG_TEXT, &msg, (uint8_t)(PB_DEBUG_TEXT_HEAD_SIZE + n));
 }

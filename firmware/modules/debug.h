@@ -15,8 +15,8 @@
 #include <stdarg.h>
 #include <stdint.h>
 
+#include "core/data.h"
 #include "hal/hal.h"
-#include "modules/settings.h"
 #include "pb_protocol.h"
 
 #ifndef DEBUG_MAX_MAIN
@@ -42,6 +42,9 @@
 #endif
 #ifndef DEBUG_MAX_SCHEDULER
 #define DEBUG_MAX_SCHEDULER 4
+#endif
+#ifndef DEBUG_MAX_TRACK
+#define DEBUG_MAX_TRACK 4
 #endif
 
 #ifdef __AVR__

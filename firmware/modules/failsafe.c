@@ -1,27 +1,19 @@
 #include "failsafe.h"
 
+#include "core/data.h"
+#include "modules/comm.h"
 #include "modules/debug.h"
 #include "modules/line_follower.h"
 #include "modules/locomotion.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
-
-static uint32_t last_seen_ms;
 
 void failsafe_init(void)
 {
-    last_seen_ms = robot_state.time.time_ms;
-}
-
-void failsafe_host_seen(void)
-{
-    last_seen_ms = robot_state.time.time_ms;
 }
 
 void failsafe_task(void)
 {
     uint16_t timeout = settings.link.failsafe_timeout_ms;
-    if (timeout == 0 || robot_state.time.time_ms - last_seen_ms < timeout)
+    if (timeout == 0 || robot_state.time.time_ms - comm_host_seen_ms() < timeout)
         return;
     uint8_t mode = robot_state.locomotion.mode;
     bool host_driven = mode == PB_LOCO_MODE_MOVEMENT || mode == PB_LOCO_MODE_TELEOP;

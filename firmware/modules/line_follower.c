@@ -1,11 +1,13 @@
 #include "line_follower.h"
 
-#include "drivers/line_sensor.h"
+#include <stddef.h>
+#include <string.h>
+
+#include "core/data.h"
+#include "modules/comm.h"
 #include "modules/debug.h"
 #include "modules/locomotion.h"
 #include "modules/pid.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 
 /** Largest wheel speed difference the line PD may ask for, m/s. */
 #define LINE_MAX_TURN 1.0f
@@ -41,6 +43,13 @@ static void refresh_params(void)
     k.blue = to_umps(settings.line_follow.blue_speed_mps);
 }
 
+static uint8_t on_line_follow(const pb_frame_t *cmd, uint16_t *detail)
+{
+    pb_line_follow_t c;
+    memcpy(&c, cmd->payload, sizeof c);
+    return line_follower_command(&c, detail);
+}
+
 void line_follower_init(void)
 {
     running = 0;
@@ -48,12 +57,25 @@ void line_follower_init(void)
     refresh_params();
     robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_OFF;
     robot_state.line_follow.segment = PB_COLOUR_UNKNOWN;
+    comm_register(PB_PKT_LINE_FOLLOW, on_line_follow);
 }
 
-uint8_t line_follower_command(uint8_t run, uint8_t mode, float speed_mps)
+uint8_t line_follower_command(const pb_line_follow_t *c, uint16_t *detail)
 {
-    if (run > 1 || mode > PB_COLOUR_MODE_SEGMENTS || !(speed_mps >= 0.0f && speed_mps <= LOCOMOTION_MAX_SPEED))
-        return PB_ERROR_CODE_BAD_ARGUMENT; /* the comparison is false for NaN too */
+    uint8_t run = c->run, mode = c->colour_mode;
+    float speed_mps = c->speed_mps;
+    if (run > 1) {
+        *detail = offsetof(pb_line_follow_t, run);
+        return PB_ERROR_CODE_BAD_ARGUMENT;
+    }
+    if (mode > PB_COLOUR_MODE_SEGMENTS) {
+        *detail = offsetof(pb_line_follow_t, colour_mode);
+        return PB_ERROR_CODE_BAD_ARGUMENT;
+    }
+    if (!(speed_mps >= 0.0f && speed_mps <= LOCOMOTION_MAX_SPEED)) { /* false for NaN too */
+        *detail = offsetof(pb_line_follow_t, speed_mps);
+        return PB_ERROR_CODE_BAD_ARGUMENT;
+    }
     if (!run) {
         if (running) {
             line_follower_stop();
@@ -103,19 +125,29 @@ void line_follower_task(void)
         line_follower_stop();
         return;
     }
-    if (robot_state.line.flags & LINE_FLAG_LOST) {
+    if (robot_state.line.flags & PB_LINE_FLAG_LOST) {
         if (robot_state.line_follow.status != PB_LINE_FOLLOW_STATUS_LOST)
             DEBUG_PRINT(LINE, 1, "line lost");
         robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_LOST;
         pid_reset(&pid);
-        locomotion_line_follow_set(0, 0);
+        locomotion_wheel_setpoints(0, 0);
         return;
     }
     robot_state.line_follow.status = PB_LINE_FOLLOW_STATUS_FOLLOWING;
+    line_follower_steer(cruise_speed());
+}
+
+void line_follower_steer(int32_t v)
+{
+    refresh_params();
     /* Positive position: the line is to the right, so the left wheel runs faster. */
     int32_t u = pid_update(&pid, &k.pid, robot_state.line.position, (int32_t)(LINE_MAX_TURN * MM_PER_M) << PID_Q);
     /* Half the difference in um/s: u * 1000 / 2^16 / 2 = (u / 2^6) * 125 / 2^8 (|u / 2^6| <= 1024000). */
     int32_t half = (u >> 6) * 125 >> 8;
-    int32_t v = cruise_speed();
-    locomotion_line_follow_set(v + half, v - half);
+    locomotion_wheel_setpoints(v + half, v - half);
+}
+
+void line_follower_steer_reset(void)
+{
+    pid_reset(&pid);
 }

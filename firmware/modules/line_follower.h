@@ -10,11 +10,20 @@
 
 #include <stdint.h>
 
+#include "pb_protocol.h"
+
+/** Registers `line_follow` with comm. */
 void line_follower_init(void);
 void line_follower_task(void);
-/** Handles the `line_follow` command. \return PB_ERROR_CODE_NONE or PB_ERROR_CODE_BAD_ARGUMENT. */
-uint8_t line_follower_command(uint8_t run, uint8_t colour_mode, float speed_mps);
+/** The `line_follow` command. \return PB_ERROR_CODE_NONE or PB_ERROR_CODE_BAD_ARGUMENT (detail: the payload
+ *  offset of the refused field). */
+uint8_t line_follower_command(const pb_line_follow_t *c, uint16_t *detail);
 /** Stops following (the caller decides what the motors do). */
 void line_follower_stop(void);
+
+/** One step of the line PD at cruise speed `v_umps` (um/s): sets the wheel set points. For a module that
+ *  follows the line its own way (the track behaviour); call line_follower_steer_reset() when it starts. */
+void line_follower_steer(int32_t v_umps);
+void line_follower_steer_reset(void);
 
 #endif

@@ -1,14 +1,19 @@
 #include "locomotion.h"
 
+#include <stddef.h>
+#include <string.h>
+
+#include "core/data.h"
+#include "core/fixed.h"
+#include "core/scheduler.h"
 #include "drivers/motors.h"
 #include "modules/comm.h"
 #include "modules/debug.h"
-#include "modules/fixed.h"
+#include "modules/movement_log.h"
 #include "modules/pid.h"
-#include "modules/reflector.h"
-#include "modules/scheduler.h"
-#include "modules/settings.h"
 #include "modules/speed.h"
+
+_Static_assert(MOVEMENT_LOG_SIZE >= LOCOMOTION_QUEUE_SIZE, "a failsafe that clears a full queue is logged whole");
 
 #define DEG_TO_RAD 0.0174532925f
 #define MAX_DISTANCE 100.0f
@@ -28,6 +33,8 @@ typedef struct {
     int32_t master;   /* distance of the faster wheel, um */
     int16_t bl, br;   /* left:right shares dl/master, dr/master, Q14 */
     int16_t pl, pr;   /* projections: done along the faster wheel = sl * pl + sr * pr, Q14 */
+    float scale;      /* request / master: the distance (m) or angle (deg) asked for per um of the faster wheel,
+                       * so that `done` is reported in the request's unit and sign with one multiplication */
 } movement_t;
 
 static movement_t queue[LOCOMOTION_QUEUE_SIZE];
@@ -36,6 +43,7 @@ static uint8_t q_head, q_count; /* the running movement stays at the head */
 static struct {
     uint8_t running;
     uint8_t braking;
+    uint8_t stopping;      /* braking on a host's stop: it ends as stopped */
     int32_t sl0, sr0;      /* wheel positions at the start, um */
     int32_t vmin;          /* um/s */
     uint32_t vmin_sq;      /* (vmin >> BRAKE_SHIFT)^2 */
@@ -48,14 +56,23 @@ static struct {
  * rest, and later movements cut the motors that much earlier. */
 #define COAST_MAX_Q14 4915 /* 0.3 s in Q14 seconds */
 #define COAST_MIN_V_UMPS 5000
-static struct {
-    uint8_t watching;
-    int32_t sl0, sr0;      /* the finished movement's frame */
-    int16_t pl, pr;
-    int32_t s_cut, v_cut;  /* distance done (um) and speed (um/s) when the motors were cut */
-} coast;
 static int16_t coast_q14; /* learnt coasting time, Q14 seconds (0 until the first observation) */
 static uint8_t coast_seen;
+
+/* A movement that ended while the robot still rolls: its result is recorded at once with what it did so far
+ * and settled when the wheels stand still (or something else drives them, or LOCOMOTION_SETTLE_MS passed),
+ * with the coasting included. The same observation teaches the coasting time. */
+static struct {
+    uint8_t active;
+    uint8_t learn;         /* a finished movement coming to rest: learn the coasting time from it */
+    uint8_t finished;      /* its outcome is finished: locomotion.finished_id when settled */
+    uint16_t id;
+    int32_t sl0, sr0;      /* the movement's frame */
+    int16_t pl, pr;
+    float scale;
+    int32_t s_cut, v_cut;  /* distance done (um) and speed (um/s) when the motors were cut */
+    uint32_t since_ms;
+} settle;
 
 /* Where the last movement should have ended, when the next one follows straight on. */
 static uint8_t chain;
@@ -134,11 +151,18 @@ static int16_t to_q14(float v)
     return (int16_t)round_to_int(v * (float)FX_ONE);
 }
 
+static uint8_t on_move_straight(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_move_rotate(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_move_arc(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_stop(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_wheel_speeds(const pb_frame_t *cmd, uint16_t *detail);
+
 void locomotion_init(void)
 {
     q_head = q_count = 0;
     act.running = 0;
-    coast.watching = 0;
+    act.stopping = 0;
+    settle.active = 0;
     coast_q14 = 0;
     coast_seen = 0;
     chain = 0;
@@ -149,9 +173,15 @@ void locomotion_init(void)
     robot_state.locomotion.queue_length = 0;
     robot_state.locomotion.current_id = 0;
     robot_state.locomotion.finished_id = 0;
+    movement_log_init();
+    comm_register(PB_PKT_MOVE_STRAIGHT, on_move_straight);
+    comm_register(PB_PKT_MOVE_ROTATE, on_move_rotate);
+    comm_register(PB_PKT_MOVE_ARC, on_move_arc);
+    comm_register(PB_PKT_STOP, on_stop);
+    comm_register(PB_PKT_WHEEL_SPEEDS, on_wheel_speeds);
 }
 
-static uint8_t enqueue(uint16_t id, float dl, float dr, float v)
+static uint8_t enqueue(uint16_t id, float dl, float dr, float v, float request)
 {
     if (q_count >= LOCOMOTION_QUEUE_SIZE)
         return PB_ERROR_CODE_QUEUE_FULL;
@@ -175,6 +205,7 @@ static uint8_t enqueue(uint16_t id, float dl, float dr, float v)
     m->br = to_q14(br);
     m->pl = to_q14(bl * inv_b2);
     m->pr = to_q14(br * inv_b2);
+    m->scale = request * inv_master * (1.0f / UM_PER_M); /* 0 for a movement of no length */
     q_count++;
     if (mode() != PB_LOCO_MODE_MOVEMENT) {
         set_mode(PB_LOCO_MODE_MOVEMENT);
@@ -189,46 +220,165 @@ static bool speed_ok(float v)
     return is_finite(v) && v > 0.0f && v <= LOCOMOTION_MAX_SPEED;
 }
 
-uint8_t locomotion_straight(uint16_t id, float distance_m, float speed_mps)
+static bool distance_ok(float d)
 {
-    if (id == 0 || !speed_ok(speed_mps) || !is_finite(distance_m) || distance_m > MAX_DISTANCE ||
-        distance_m < -MAX_DISTANCE)
-        return PB_ERROR_CODE_BAD_ARGUMENT;
-    return enqueue(id, distance_m, distance_m, speed_mps);
+    return is_finite(d) && d <= MAX_DISTANCE && d >= -MAX_DISTANCE;
 }
 
-uint8_t locomotion_rotate(uint16_t id, float angle_deg, float speed_mps)
+static bool angle_ok(float a)
 {
-    if (id == 0 || !speed_ok(speed_mps) || !is_finite(angle_deg) || angle_deg > 36000.0f || angle_deg < -36000.0f)
-        return PB_ERROR_CODE_BAD_ARGUMENT;
-    float half = angle_deg * DEG_TO_RAD * 0.5f * settings.geometry.wheel_base_m;
-    return enqueue(id, -half, half, speed_mps);
+    return is_finite(a) && a <= 36000.0f && a >= -36000.0f;
 }
 
-uint8_t locomotion_arc(uint16_t id, float radius_m, float angle_deg, float speed_mps)
+/* Each refusal names the first refused field by its payload offset (error.detail). */
+#define REFUSE(type, field)                                                                                \
+    do {                                                                                                   \
+        *detail = offsetof(type, field);                                                                   \
+        return PB_ERROR_CODE_BAD_ARGUMENT;                                                                 \
+    } while (0)
+
+uint8_t locomotion_straight(const pb_move_straight_t *c, uint16_t *detail)
 {
-    if (id == 0 || !speed_ok(speed_mps) || !is_finite(angle_deg) || angle_deg > 36000.0f || angle_deg < -36000.0f ||
-        !is_finite(radius_m) || radius_m <= 0.0f || radius_m > MAX_DISTANCE)
-        return PB_ERROR_CODE_BAD_ARGUMENT;
-    float th = angle_deg * DEG_TO_RAD;
+    if (c->id == 0)
+        REFUSE(pb_move_straight_t, id);
+    if (!distance_ok(c->distance_m))
+        REFUSE(pb_move_straight_t, distance_m);
+    if (!speed_ok(c->speed_mps))
+        REFUSE(pb_move_straight_t, speed_mps);
+    return enqueue(c->id, c->distance_m, c->distance_m, c->speed_mps, c->distance_m);
+}
+
+uint8_t locomotion_rotate(const pb_move_rotate_t *c, uint16_t *detail)
+{
+    if (c->id == 0)
+        REFUSE(pb_move_rotate_t, id);
+    if (!angle_ok(c->angle_deg))
+        REFUSE(pb_move_rotate_t, angle_deg);
+    if (!speed_ok(c->speed_mps))
+        REFUSE(pb_move_rotate_t, speed_mps);
+    float half = c->angle_deg * DEG_TO_RAD * 0.5f * settings.geometry.wheel_base_m;
+    return enqueue(c->id, -half, half, c->speed_mps, c->angle_deg);
+}
+
+uint8_t locomotion_arc(const pb_move_arc_t *c, uint16_t *detail)
+{
+    if (c->id == 0)
+        REFUSE(pb_move_arc_t, id);
+    float radius_m = c->radius_m;
+    if (!is_finite(radius_m) || radius_m <= 0.0f || radius_m > MAX_DISTANCE)
+        REFUSE(pb_move_arc_t, radius_m);
+    if (!angle_ok(c->angle_deg))
+        REFUSE(pb_move_arc_t, angle_deg);
+    if (!speed_ok(c->speed_mps))
+        REFUSE(pb_move_arc_t, speed_mps);
+    float th = c->angle_deg * DEG_TO_RAD;
     float ath = th < 0.0f ? -th : th;
     float half = 0.5f * settings.geometry.wheel_base_m;
     float dl = ath * radius_m - th * half;
     float dr = ath * radius_m + th * half;
     if (dl > MAX_WHEEL_DISTANCE || dl < -MAX_WHEEL_DISTANCE || dr > MAX_WHEEL_DISTANCE || dr < -MAX_WHEEL_DISTANCE)
-        return PB_ERROR_CODE_BAD_ARGUMENT;
+        REFUSE(pb_move_arc_t, radius_m);
     /* The outer wheel is the faster one: scale the centre speed up to it. */
-    float v = speed_mps * (radius_m + half) / radius_m;
+    float v = c->speed_mps * (radius_m + half) / radius_m;
     if (v > LOCOMOTION_MAX_SPEED)
         v = LOCOMOTION_MAX_SPEED;
-    return enqueue(id, dl, dr, v);
+    return enqueue(c->id, dl, dr, v, c->angle_deg);
 }
 
-static void clear_queue(void)
+/* What a movement did, in the unit and sign of its request. */
+static float done_value(float scale, int32_t done_um)
 {
+    return scale * (float)done_um;
+}
+
+/* Progress of the movement with this frame along its faster wheel, um, now. (Not speed_positions_um():
+ * movement_step() is its only caller, so that it stays inlined in the per-tick path.) */
+static int32_t progress_um(int32_t sl0, int32_t sr0, int16_t pl, int16_t pr)
+{
+    return fx_frac(speed_position_um(0) - sl0, pl) + fx_frac(speed_position_um(1) - sr0, pr);
+}
+
+/* Time to coast `d` um from `v` um/s, Q14 seconds, at most COAST_MAX_Q14. */
+static int16_t coast_time(int32_t d, int32_t v)
+{
+    if (d <= 0)
+        return 0;
+    if (d >= v / 10 * 3 + 1) /* d / v >= 0.3 s (v / 10 * 3 <= 0.3 v: rounding keeps the cap) */
+        return COAST_MAX_Q14;
+    uint32_t ud = (uint32_t)d, uv = (uint32_t)v;
+    while (ud >= (1ul << 17)) { /* keep ud << 14 within 32 bits */
+        ud >>= 1;
+        uv >>= 1;
+    }
+    uint32_t t = (ud << 14) / uv; /* uv > ud / 0.3 >= 1 */
+    return (int16_t)(t > COAST_MAX_Q14 ? COAST_MAX_Q14 : t);
+}
+
+/* Records the settling result with what the wheels did by now; learns the coasting time when asked to. */
+static void settle_finish(bool at_rest)
+{
+    settle.active = 0;
+    int32_t done = progress_um(settle.sl0, settle.sr0, settle.pl, settle.pr);
+    movement_log_settle(done_value(settle.scale, done));
+    if (settle.finished)
+        robot_state.locomotion.finished_id = settle.id;
+    if (!settle.learn || !at_rest)
+        return;
+    int16_t t = coast_time(done - settle.s_cut, settle.v_cut);
+    /* Learn at 0.3 (19661 / 2^16) of the way towards each new observation. */
+    coast_q14 = coast_seen ? (int16_t)(coast_q14 + (((int32_t)t - coast_q14) * 19661L >> 16)) : t;
+    coast_seen = 1;
+    DEBUG_PRINT(LOCOMOTION, 3, "coasting %u ms", (unsigned)(((uint32_t)coast_q14 * 1000u) >> 14));
+}
+
+/* The running movement `m` ended with the robot still rolling: record it now, settle it at rest. */
+static void settle_begin(const movement_t *m, uint8_t outcome, int32_t s_done, int32_t v_now, bool learn)
+{
+    if (settle.active) /* the previous one rolled into this one: it is as done as it gets */
+        settle_finish(false);
+    settle.active = 1;
+    settle.learn = learn;
+    settle.finished = outcome == PB_MOVEMENT_OUTCOME_FINISHED;
+    settle.id = m->id;
+    settle.sl0 = act.sl0;
+    settle.sr0 = act.sr0;
+    settle.pl = m->pl;
+    settle.pr = m->pr;
+    settle.scale = m->scale;
+    settle.s_cut = s_done;
+    settle.v_cut = v_now;
+    settle.since_ms = robot_state.time.time_ms;
+    movement_log_record(m->id, outcome, done_value(m->scale, s_done), false);
+}
+
+static void settle_step(void)
+{
+    uint8_t mode_now = robot_state.locomotion.mode;
+    bool driven = mode_now == PB_LOCO_MODE_MOVEMENT || mode_now == PB_LOCO_MODE_TELEOP ||
+                  mode_now == PB_LOCO_MODE_LINE_FOLLOW || mode_now == PB_LOCO_MODE_TRACK;
+    bool at_rest = speed_umps(0) == 0 && speed_umps(1) == 0;
+    if (at_rest || driven || robot_state.time.time_ms - settle.since_ms >= LOCOMOTION_SETTLE_MS)
+        settle_finish(at_rest && !driven);
+}
+
+/* Ends every queued movement: the running one (settled at rest) with `running_outcome` (stopped if a host's
+ * stop is braking it), the others with `queued_outcome`, in queue order. */
+static void clear_queue(uint8_t running_outcome, uint8_t queued_outcome)
+{
+    uint8_t i = 0;
+    if (q_count && act.running) {
+        const movement_t *m = &queue[q_head];
+        int32_t v = fx_frac(speed_umps(0), m->pl) + fx_frac(speed_umps(1), m->pr);
+        settle_begin(m, act.stopping ? PB_MOVEMENT_OUTCOME_STOPPED : running_outcome,
+                     progress_um(act.sl0, act.sr0, m->pl, m->pr), v, false);
+        i = 1;
+    }
+    for (; i < q_count; i++)
+        movement_log_record(queue[(uint8_t)(q_head + i) % LOCOMOTION_QUEUE_SIZE].id, queued_outcome, 0.0f, true);
     q_count = 0;
     act.running = 0;
     act.braking = 0;
+    act.stopping = 0;
     robot_state.locomotion.queue_length = 0;
     robot_state.locomotion.current_id = 0;
 }
@@ -236,35 +386,54 @@ static void clear_queue(void)
 void locomotion_stop(bool immediate)
 {
     if (!immediate && mode() == PB_LOCO_MODE_MOVEMENT && act.running) {
-        q_count = 1; /* keep only the running movement, and brake it */
+        /* Keep only the running movement, and brake it; the rest never started. */
+        for (uint8_t i = 1; i < q_count; i++)
+            movement_log_record(queue[(uint8_t)(q_head + i) % LOCOMOTION_QUEUE_SIZE].id, PB_MOVEMENT_OUTCOME_DROPPED,
+                                0.0f, true);
+        q_count = 1;
         act.braking = 1;
+        act.stopping = 1;
         robot_state.locomotion.queue_length = 1;
         return;
     }
-    clear_queue();
+    clear_queue(PB_MOVEMENT_OUTCOME_STOPPED, PB_MOVEMENT_OUTCOME_DROPPED);
     set_mode(PB_LOCO_MODE_IDLE);
+    target[0] = target[1] = 0;
     motors_set(0, 0);
 }
 
-uint8_t locomotion_teleop(float left_mps, float right_mps)
+uint8_t locomotion_teleop(const pb_wheel_speeds_t *c, uint16_t *detail)
 {
-    if (!is_finite(left_mps) || !is_finite(right_mps) || left_mps > LOCOMOTION_MAX_SPEED ||
-        left_mps < -LOCOMOTION_MAX_SPEED || right_mps > LOCOMOTION_MAX_SPEED || right_mps < -LOCOMOTION_MAX_SPEED)
-        return PB_ERROR_CODE_BAD_ARGUMENT;
-    clear_queue();
+    float left = c->left_mps, right = c->right_mps;
+    if (!is_finite(left) || left > LOCOMOTION_MAX_SPEED || left < -LOCOMOTION_MAX_SPEED)
+        REFUSE(pb_wheel_speeds_t, left_mps);
+    if (!is_finite(right) || right > LOCOMOTION_MAX_SPEED || right < -LOCOMOTION_MAX_SPEED)
+        REFUSE(pb_wheel_speeds_t, right_mps);
+    clear_queue(PB_MOVEMENT_OUTCOME_STOPPED, PB_MOVEMENT_OUTCOME_DROPPED);
     set_mode(PB_LOCO_MODE_TELEOP);
-    locomotion_line_follow_set(round_to_int(left_mps * UM_PER_M), round_to_int(right_mps * UM_PER_M));
+    locomotion_wheel_setpoints(round_to_int(left * UM_PER_M), round_to_int(right * UM_PER_M));
     return PB_ERROR_CODE_NONE;
+}
+
+/* A module steering the wheels by set points takes the motors. */
+static void wheels_begin(uint8_t m)
+{
+    clear_queue(PB_MOVEMENT_OUTCOME_STOPPED, PB_MOVEMENT_OUTCOME_DROPPED);
+    set_mode(m);
+    target[0] = target[1] = 0;
 }
 
 void locomotion_line_follow_begin(void)
 {
-    clear_queue();
-    set_mode(PB_LOCO_MODE_LINE_FOLLOW);
-    target[0] = target[1] = 0;
+    wheels_begin(PB_LOCO_MODE_LINE_FOLLOW);
 }
 
-void locomotion_line_follow_set(int32_t left_umps, int32_t right_umps)
+void locomotion_track_begin(void)
+{
+    wheels_begin(PB_LOCO_MODE_TRACK);
+}
+
+void locomotion_wheel_setpoints(int32_t left_umps, int32_t right_umps)
 {
     /* A wheel that reverses starts its PID afresh: the old integral pushes the wrong way. */
     if ((left_umps < 0) != (target[0] < 0))
@@ -277,12 +446,13 @@ void locomotion_line_follow_set(int32_t left_umps, int32_t right_umps)
 
 void locomotion_failsafe(void)
 {
-    clear_queue();
+    clear_queue(PB_MOVEMENT_OUTCOME_FAILSAFE, PB_MOVEMENT_OUTCOME_FAILSAFE);
     set_mode(PB_LOCO_MODE_FAILSAFE);
+    target[0] = target[1] = 0;
     motors_set(0, 0);
 }
 
-/* Per-wheel speed PIDs towards target[] (teleoperation and line following). */
+/* Per-wheel speed PIDs towards target[] (teleoperation, line following, track). */
 HAL_NOINLINE_SIM static void wheel_step(void)
 {
     int32_t lim = pwm_limit_q16();
@@ -303,6 +473,7 @@ static void start_next(void)
     const movement_t *m = &queue[q_head];
     act.running = 1;
     act.braking = 0;
+    act.stopping = 0;
     act.sl0 = chain ? end_l : speed_position_um(0);
     act.sr0 = chain ? end_r : speed_position_um(1);
     act.vmin = k.vmin < m->v ? k.vmin : m->v;
@@ -318,25 +489,24 @@ static void start_next(void)
     DEBUG_PRINT(LOCOMOTION, 3, "start %u", m->id);
 }
 
+/* The running movement ended: at a hand-over to the next one it is recorded now, with what its wheels did
+ * (the next one starts from its ideal end, so the rest is driven as part of that one); before a rest it
+ * settles first. */
 static void finish(bool completed, int32_t s_done, int32_t v_now)
 {
     const movement_t *m = &queue[q_head];
-    coast.watching = completed && q_count == 1 && v_now > COAST_MIN_V_UMPS;
-    coast.sl0 = act.sl0;
-    coast.sr0 = act.sr0;
-    coast.pl = m->pl;
-    coast.pr = m->pr;
-    coast.s_cut = s_done;
-    coast.v_cut = v_now;
-    if (completed) {
-        robot_state.locomotion.finished_id = m->id;
-        pb_movement_done_t d = {m->id};
-        comm_send(PB_PKT_MOVEMENT_DONE, &d, sizeof d);
-        DEBUG_PRINT(LOCOMOTION, 2, "done %u", m->id);
-    }
+    uint8_t outcome = completed ? PB_MOVEMENT_OUTCOME_FINISHED : PB_MOVEMENT_OUTCOME_STOPPED;
     end_l = act.sl0 + m->dl;
     end_r = act.sr0 + m->dr;
+    if (completed && q_count > 1) {
+        movement_log_record(m->id, outcome, done_value(m->scale, s_done), true);
+        robot_state.locomotion.finished_id = m->id;
+    } else {
+        settle_begin(m, outcome, s_done, v_now, completed && v_now > COAST_MIN_V_UMPS);
+    }
+    DEBUG_PRINT(LOCOMOTION, 2, "done %u (%u)", m->id, outcome);
     act.running = 0;
+    act.stopping = 0;
     q_head = (uint8_t)((q_head + 1u) % LOCOMOTION_QUEUE_SIZE);
     q_count--;
     /* Only a movement that follows at once inherits the ideal end point (coasting is corrected). */
@@ -401,61 +571,67 @@ HAL_NOINLINE_SIM static void movement_step(void)
                duty_towards(fx_frac(base, m->br) + fx_frac(c, m->bl), m->dr));
 }
 
-/* Time to coast `d` um from `v` um/s, Q14 seconds, at most COAST_MAX_Q14. */
-static int16_t coast_time(int32_t d, int32_t v)
-{
-    if (d <= 0)
-        return 0;
-    if (d >= v / 10 * 3 + 1) /* d / v >= 0.3 s (v / 10 * 3 <= 0.3 v: rounding keeps the cap) */
-        return COAST_MAX_Q14;
-    uint32_t ud = (uint32_t)d, uv = (uint32_t)v;
-    while (ud >= (1ul << 17)) { /* keep ud << 14 within 32 bits */
-        ud >>= 1;
-        uv >>= 1;
-    }
-    uint32_t t = (ud << 14) / uv; /* uv > ud / 0.3 >= 1 */
-    return (int16_t)(t > COAST_MAX_Q14 ? COAST_MAX_Q14 : t);
-}
-
-/* Once the robot rests after a movement, how far it rolled after the cut tells the coasting time. */
-static void coast_watch(void)
-{
-    if (mode() != PB_LOCO_MODE_IDLE) {
-        coast.watching = 0;
-        return;
-    }
-    if (speed_umps(0) != 0 || speed_umps(1) != 0)
-        return;
-    coast.watching = 0;
-    int32_t done = fx_frac(speed_position_um(0) - coast.sl0, coast.pl) +
-                   fx_frac(speed_position_um(1) - coast.sr0, coast.pr);
-    int16_t t = coast_time(done - coast.s_cut, coast.v_cut);
-    /* Learn at 0.3 (19661 / 2^16) of the way towards each new observation. */
-    coast_q14 = coast_seen ? (int16_t)(coast_q14 + (((int32_t)t - coast_q14) * 19661L >> 16)) : t;
-    coast_seen = 1;
-    DEBUG_PRINT(LOCOMOTION, 3, "coasting %u ms", (unsigned)(((uint32_t)coast_q14 * 1000u) >> 14));
-}
-
 float locomotion_coast_s(void)
 {
     return (float)coast_q14 / (float)FX_ONE;
 }
 
+/* ---- host commands ---- */
+
+static uint8_t on_move_straight(const pb_frame_t *cmd, uint16_t *detail)
+{
+    pb_move_straight_t c;
+    memcpy(&c, cmd->payload, sizeof c);
+    return locomotion_straight(&c, detail);
+}
+
+static uint8_t on_move_rotate(const pb_frame_t *cmd, uint16_t *detail)
+{
+    pb_move_rotate_t c;
+    memcpy(&c, cmd->payload, sizeof c);
+    return locomotion_rotate(&c, detail);
+}
+
+static uint8_t on_move_arc(const pb_frame_t *cmd, uint16_t *detail)
+{
+    pb_move_arc_t c;
+    memcpy(&c, cmd->payload, sizeof c);
+    return locomotion_arc(&c, detail);
+}
+
+static uint8_t on_stop(const pb_frame_t *cmd, uint16_t *detail)
+{
+    uint8_t immediate = cmd->payload[offsetof(pb_stop_t, immediate)];
+    if (immediate > 1)
+        REFUSE(pb_stop_t, immediate);
+    locomotion_stop(immediate != 0); /* line following sees its mode gone and stops too */
+    return PB_ERROR_CODE_NONE;
+}
+
+static uint8_t on_wheel_speeds(const pb_frame_t *cmd, uint16_t *detail)
+{
+    pb_wheel_speeds_t c;
+    memcpy(&c, cmd->payload, sizeof c);
+    return locomotion_teleop(&c, detail);
+}
+
 void locomotion_task(void)
 {
     refresh_params();
-    if (coast.watching)
-        coast_watch();
+    if (settle.active)
+        settle_step();
     switch (mode()) {
     case PB_LOCO_MODE_MOVEMENT:
         movement_step();
         break;
     case PB_LOCO_MODE_TELEOP:
     case PB_LOCO_MODE_LINE_FOLLOW:
+    case PB_LOCO_MODE_TRACK:
         wheel_step();
         break;
     default:
         motors_set(0, 0);
         break;
     }
+    movement_log_task();
 }

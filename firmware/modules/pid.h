@@ -11,7 +11,7 @@
 
 #include <stdint.h>
 
-#include "modules/fixed.h"
+#include "core/fixed.h"
 #include "pb_protocol.h"
 
 /** Largest error magnitude a controller accepts; larger ones are clamped (so e - e_prev cannot overflow). */

@@ -1,12 +1,12 @@
 #include "proximity.h"
 
+#include <stddef.h>
 #include <string.h>
 
+#include "core/data.h"
+#include "core/scheduler.h"
 #include "drivers/ir.h"
 #include "modules/comm.h"
-#include "modules/reflector.h"
-#include "modules/scheduler.h"
-#include "modules/settings.h"
 
 #define LEDS 4u
 #define LEVELS 3u
@@ -35,12 +35,16 @@ static volatile uint8_t burst_msgs;   /* messages in it */
 static uint8_t level;                 /* power level of the next beacon */
 static hal_ir_msg_t payload_msg;      /* pending payload, len > 0 while pending */
 static volatile uint8_t payload_pending, payload_in_burst;
+static proximity_payload_cb_t payload_cb;
 
-/* Last payload forwarded, to drop the copies a beacon carries from its four LEDs. */
+/* Last payload forwarded, to drop the copies a beacon carries from its four LEDs; `pending` while its
+ * ir_received waits for room on the link (the next payload heard replaces it). */
 static struct {
     uint8_t sender, len;
     uint8_t data[HAL_IR_PAYLOAD_MAX];
     uint32_t ms;
+    uint8_t pending;
+    pb_ir_received_t packet;
 } last_fwd;
 
 uint8_t proximity_distance_class(uint8_t power)
@@ -96,6 +100,16 @@ static void beacon(void)
     send_next();
 }
 
+static uint8_t on_ir_send(const pb_frame_t *cmd, uint16_t *detail)
+{
+    pb_ir_send_t c;
+    memcpy(&c, cmd->payload, cmd->len);
+    uint8_t code = proximity_send_payload(c.power, c.data, (uint8_t)(cmd->len - PB_IR_SEND_HEAD_SIZE));
+    if (code == PB_ERROR_CODE_BAD_ARGUMENT)
+        *detail = offsetof(pb_ir_send_t, power); /* the size table already bounds the data */
+    return code;
+}
+
 void proximity_init(void)
 {
     memset(sides, 0, sizeof sides);
@@ -105,13 +119,20 @@ void proximity_init(void)
     burst_msg = burst_msgs = 0;
     level = 0;
     payload_pending = payload_in_burst = 0;
+    payload_cb = NULL;
     ir_init();
     scheduler_after(SCHED_CH_PROX_BEACON, 1000u * (uint32_t)settings.proximity.beacon_period_ms, beacon);
+    comm_register(PB_PKT_IR_SEND, on_ir_send);
+}
+
+void proximity_on_payload(proximity_payload_cb_t cb)
+{
+    payload_cb = cb;
 }
 
 uint8_t proximity_send_payload(uint8_t power, const uint8_t *data, uint8_t len)
 {
-    if (power < 1u || power > 100u || len > HAL_IR_PAYLOAD_MAX)
+    if (power < 1u || power > 100u || len > HAL_IR_PAYLOAD_MAX) /* the size table keeps len within 8 */
         return PB_ERROR_CODE_BAD_ARGUMENT;
     if (payload_pending)
         return PB_ERROR_CODE_BUSY;
@@ -132,13 +153,19 @@ static void forward_payload(uint8_t side, const hal_ir_msg_t *m, uint32_t now)
     last_fwd.len = m->len;
     memcpy(last_fwd.data, m->data, m->len);
     last_fwd.ms = now;
-    pb_ir_received_t r;
-    r.sender_id = m->sender_id;
-    r.side = side;
-    r.sender_led = m->led;
-    r.power = m->power;
-    memcpy(r.data, m->data, m->len);
-    comm_send(PB_PKT_IR_RECEIVED, &r, (uint8_t)(PB_IR_RECEIVED_MIN_SIZE + m->len));
+    pb_ir_received_t *r = &last_fwd.packet;
+    r->sender_id = m->sender_id;
+    r->side = side;
+    r->sender_led = m->led;
+    r->power = m->power;
+    memcpy(r->data, m->data, m->len);
+    last_fwd.pending = 1;
+}
+
+static void forward_pending(void)
+{
+    if (comm_offer(PB_PKT_IR_RECEIVED, &last_fwd.packet, (uint8_t)(PB_IR_RECEIVED_HEAD_SIZE + last_fwd.len)))
+        last_fwd.pending = 0;
 }
 
 static void heard(uint8_t side_no, const hal_ir_msg_t *m, uint32_t now)
@@ -151,7 +178,7 @@ static void heard(uint8_t side_no, const hal_ir_msg_t *m, uint32_t now)
         s->heard_obstacle = 1;
         return;
     }
-    if (m->len)
+    if (m->len && !(payload_cb && payload_cb(side_no, m)))
         forward_payload(side_no, m, now);
     uint8_t cls = proximity_distance_class(m->power);
     bool current = s->heard_robot && now - s->robot_ms < hold;
@@ -197,10 +224,10 @@ static void publish(pb_proximity_side_t *out, side_t *s, uint32_t now)
     uint16_t oldest = 0;
     uint8_t flags = 0;
     if (s->heard_obstacle && live(s->obstacle_ms, now, hold, &oldest))
-        flags |= PROXIMITY_FLAG_OBSTACLE;
+        flags |= PB_PROXIMITY_FLAG_OBSTACLE;
     uint8_t cls = PB_DISTANCE_CLASS_NONE;
     if (s->heard_robot && live(s->robot_ms, now, hold, &oldest)) {
-        flags |= PROXIMITY_FLAG_ROBOT;
+        flags |= PB_PROXIMITY_FLAG_ROBOT;
         /* Lower classes that expire before this one change nothing; when it expires, this runs again. */
         for (uint8_t c = 3; c > 0 && cls == PB_DISTANCE_CLASS_NONE; c--)
             if (s->class_ms[c] && live(s->class_ms[c], now, hold, &oldest))
@@ -212,8 +239,8 @@ static void publish(pb_proximity_side_t *out, side_t *s, uint32_t now)
     s->expiring = oldest != 0;
     s->recheck_ms = now + (uint16_t)(hold - (oldest - 1u)); /* when the oldest live one reaches hold */
     out->flags = flags;
-    out->robot_id = (flags & PROXIMITY_FLAG_ROBOT) ? s->robot_id : 0;
-    out->robot_led = (flags & PROXIMITY_FLAG_ROBOT) ? s->led : 0;
+    out->robot_id = (flags & PB_PROXIMITY_FLAG_ROBOT) ? s->robot_id : 0;
+    out->robot_led = (flags & PB_PROXIMITY_FLAG_ROBOT) ? s->led : 0;
     out->distance = cls;
 }
 
@@ -228,6 +255,9 @@ void proximity_task(void)
     uint32_t now = robot_state.time.time_ms;
     uint8_t side;
     const hal_ir_msg_t *m;
+    /* A payload heard goes out in a later tick than the one that heard it: the two costs do not add up. */
+    if (last_fwd.pending)
+        forward_pending();
     while ((m = ir_peek(&side)) != NULL) {
         heard(side, m, now);
         ir_pop();

@@ -6,24 +6,35 @@
  * from the lowest power it still hears. A robot heard is reported per receiver (front, rear) with its id,
  * the LED it was heard from (its orientation) and the distance class, held for settings.proximity.hold_ms;
  * hearing its own id means an obstacle reflects the beacon. A payload from `ir_send` goes out with the
- * next beacon; payloads heard from others are forwarded to the host as `ir_received`.
+ * next beacon; payloads heard from others are forwarded to the host as `ir_received`, except those a module
+ * that talks to other robots (the track behaviour) takes as its own.
  */
 #ifndef PROXIMITY_H
 #define PROXIMITY_H
 
+#include <stdbool.h>
 #include <stdint.h>
+
+#include "hal/hal.h"
 
 /** Time between the messages of one beacon (the transmitter's message length on the robot). */
 #define PROXIMITY_MSG_SPACING_US 2000u
-#define PROXIMITY_FLAG_OBSTACLE 0x01u
-#define PROXIMITY_FLAG_ROBOT 0x02u
 
+/** Starts the beacons and registers `ir_send` with comm. */
 void proximity_init(void);
 /** Evaluates heard messages into robot_state.proximity and forwards payloads. */
 void proximity_task(void);
 /** Queues a payload for the next beacon. \return PB_ERROR_CODE_NONE or _BAD_ARGUMENT (power not 1..100,
  *  more than 8 bytes) or _BUSY (the previous payload is not sent yet). */
 uint8_t proximity_send_payload(uint8_t power, const uint8_t *data, uint8_t len);
+
+/** What a module that talks to other robots over IR gets: every payload another robot sent, heard on `side`
+ *  (PB_SIDE_*), called from proximity_task(). \return true when the payload is the module's own conversation:
+ *  then it is not forwarded to the host as `ir_received` (robots talk to each other several times a second). */
+typedef bool (*proximity_payload_cb_t)(uint8_t side, const hal_ir_msg_t *msg);
+
+/** Sets the one payload listener (call after proximity_init(); NULL: none). */
+void proximity_on_payload(proximity_payload_cb_t cb);
 
 /** Distance class of a message heard at `power` percent. */
 uint8_t proximity_distance_class(uint8_t power);

@@ -4,10 +4,22 @@
 
 #include "drivers/eeprom.h"
 #include "hal/hal.h"
+#include "modules/comm.h"
 #include "protocol/pb_frame.h"
 
-pb_settings_t settings;
-uint8_t settings_generation;
+_Static_assert(SETTINGS_CHUNK == sizeof(((pb_settings_data_t *)0)->data), "a chunk fills settings_data");
+
+/* The read_settings answer under way. */
+static struct {
+    uint8_t seq;
+    uint16_t offset;
+} reading;
+
+static uint8_t on_update(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_read(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_save(const pb_frame_t *cmd, uint16_t *detail);
+static uint8_t on_load_defaults(const pb_frame_t *cmd, uint16_t *detail);
+static bool answer_step(void);
 
 typedef struct PB_PACKED {
     uint16_t magic;
@@ -75,6 +87,10 @@ bool settings_load(void)
 
 bool settings_init(void)
 {
+    comm_register(PB_PKT_UPDATE_SETTINGS, on_update);
+    comm_register(PB_PKT_READ_SETTINGS, on_read);
+    comm_register(PB_PKT_SAVE_SETTINGS, on_save);
+    comm_register(PB_PKT_LOAD_DEFAULTS, on_load_defaults);
     eeprom_init();
     if (settings_load())
         return true;
@@ -194,4 +210,59 @@ uint8_t settings_write(uint16_t offset, uint8_t len, const uint8_t *data, uint16
     memcpy((uint8_t *)&settings + offset, data, len);
     settings_generation++;
     return PB_ERROR_CODE_NONE;
+}
+
+/* ---- host commands ---- */
+
+static uint8_t on_update(const pb_frame_t *cmd, uint16_t *detail)
+{
+    pb_update_settings_t c;
+    memcpy(&c, cmd->payload, cmd->len);
+    if (c.length != cmd->len - PB_UPDATE_SETTINGS_HEAD_SIZE) {
+        *detail = c.length;
+        return PB_ERROR_CODE_BAD_LENGTH;
+    }
+    return settings_write(c.offset, c.length, c.data, detail);
+}
+
+static uint8_t on_read(const pb_frame_t *cmd, uint16_t *detail)
+{
+    (void)detail;
+    reading.seq = cmd->seq; /* a new request restarts the answer: the host wants all of it, as it is now */
+    reading.offset = 0;
+    if (!answer_step())
+        comm_answer_later(answer_step);
+    return COMM_ANSWER_LATER;
+}
+
+static uint8_t on_save(const pb_frame_t *cmd, uint16_t *detail)
+{
+    (void)cmd;
+    (void)detail;
+    return settings_save() ? PB_ERROR_CODE_NONE : PB_ERROR_CODE_BUSY;
+}
+
+static uint8_t on_load_defaults(const pb_frame_t *cmd, uint16_t *detail)
+{
+    (void)cmd;
+    (void)detail;
+    settings_load_defaults();
+    return PB_ERROR_CODE_NONE;
+}
+
+/* Sends what fits of the chunks, then the ack. \return true when all is out. */
+static bool answer_step(void)
+{
+    for (;;) {
+        if (reading.offset >= sizeof(pb_settings_t))
+            return comm_ack(PB_PKT_READ_SETTINGS, reading.seq);
+        pb_settings_data_t d;
+        uint16_t left = (uint16_t)(sizeof(pb_settings_t) - reading.offset);
+        d.offset = reading.offset;
+        d.length = (uint8_t)(left < SETTINGS_CHUNK ? left : SETTINGS_CHUNK);
+        memcpy(d.data, (const uint8_t *)&settings + reading.offset, d.length);
+        if (!comm_offer(PB_PKT_SETTINGS_DATA, &d, (uint8_t)(PB_SETTINGS_DATA_HEAD_SIZE + d.length)))
+            return false; /* the rest next tick */
+        reading.offset = (uint16_t)(reading.offset + d.length);
+    }
 }

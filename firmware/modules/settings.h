@@ -1,7 +1,8 @@
 /**
  * \file settings.h
- * The global settings struct (thesis 6.3): compiled-in defaults, EEPROM persistence guarded by a magic,
- * the layout hash and a CRC, and bounds-checked field writes from the host.
+ * The settings module (thesis 6.3): the global `settings` (core/data.h) from compiled-in defaults or the
+ * EEPROM (guarded by a magic, the layout hash and a CRC), bounds-checked field writes from the host, and the
+ * host's settings commands (update_settings, read_settings, save_settings, load_defaults).
  */
 #ifndef SETTINGS_H
 #define SETTINGS_H
@@ -9,20 +10,20 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "core/data.h"
 #include "pb_protocol.h"
-
-extern pb_settings_t settings;
-
-/** Incremented whenever settings change; modules cache values derived from settings against it. */
-extern uint8_t settings_generation;
 
 /** EEPROM image: header, the settings, CRC-16 over both. */
 #define SETTINGS_EEPROM_ADDR 0u
 #define SETTINGS_MAGIC 0x5042u /* "PB" */
 
-/** Loads the settings from EEPROM, or the defaults when the EEPROM image is missing, stale or corrupt.
- *  \return true if the EEPROM image was used. */
+/** Loads the settings from EEPROM, or the defaults when the EEPROM image is missing, stale or corrupt, and
+ *  registers the settings commands with comm (read_settings is answered chunk by chunk as the transmit buffer
+ *  has room, through comm_answer_later()). \return true if the EEPROM image was used. */
 bool settings_init(void);
+
+/** Bytes of settings per settings_data chunk. */
+#define SETTINGS_CHUNK 64u
 
 /** Replaces the settings with the compiled-in defaults (not saved). */
 void settings_load_defaults(void);

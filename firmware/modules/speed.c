@@ -2,11 +2,10 @@
 
 #include <stdbool.h>
 
+#include "core/data.h"
+#include "core/fixed.h"
 #include "drivers/encoder.h"
 #include "hal/hal.h"
-#include "modules/fixed.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 
 typedef struct {
     int32_t v;       /* um/s, signed */
@@ -150,6 +149,9 @@ void speed_task(void)
     refresh_geometry();
     uint32_t timeout = geo.timeout;
     uint32_t now = hal_capture_now();
+    /* The bound of a late edge (a 32-bit division, a few hundred cycles on the AVR) waits for a tick in which
+     * no edge was divided: a soft bound 1 ms later changes nothing, and the worst tick has one division less. */
+    bool divided = false;
     for (uint8_t w = 0; w < 2; w++) {
         wheel_t *wh = &wheels[w];
         bool edge = false;
@@ -165,6 +167,7 @@ void speed_task(void)
             if (s.edges != wh->edges) { /* a new pulse: one division, the fixed delta-s speed */
                 wh->edges = s.edges;
                 edge = true;
+                divided = true;
                 set_speed(wh, tick_speed(s.periods >= 1 ? s.period[0] : 0, s.periods >= 2 ? s.period[1] : 0, timeout),
                           s.dir < 0);
             }
@@ -174,9 +177,10 @@ void speed_task(void)
         uint32_t age = now - wh->last;
         if (age > timeout) {
             set_speed(wh, 0, false);
-        } else if (wh->p2 != 0 && wh->v_tick != 0 && age > wh->p2) {
+        } else if (wh->p2 != 0 && wh->v_tick != 0 && age > wh->p2 && !divided) {
             /* The next edge is late (later than two stripes took): no stripe is longer than two mean pulses,
              * so the wheel is at most that fast now. Lets the speed fall before the timeout. */
+            divided = true;
             uint32_t bound = two_pulses_in(age);
             if (wh->v_tick > bound)
                 set_speed(wh, bound, wh->v < 0);

@@ -97,14 +97,20 @@ void pb_packet_lookup_init(void)
     slots_built = 1;
 }
 
-const PB_FLASH pb_packet_info_t *pb_packet_lookup(uint8_t type)
+uint8_t pb_packet_index(uint8_t type)
 {
     if (type < LOOKUP_TYPES) {
         pb_packet_lookup_init();
-        return slot_of[type] ? &pb_packet_info[slot_of[type] - 1u] : NULL;
+        return slot_of[type] ? (uint8_t)(slot_of[type] - 1u) : PB_PACKET_NONE;
     }
     for (uint8_t i = 0; i < PB_PACKET_INFO_COUNT; i++)
         if (pb_packet_info[i].type == type)
-            return &pb_packet_info[i];
-    return NULL;
+            return i;
+    return PB_PACKET_NONE;
+}
+
+const PB_FLASH pb_packet_info_t *pb_packet_lookup(uint8_t type)
+{
+    uint8_t i = pb_packet_index(type);
+    return i == PB_PACKET_NONE ? NULL : &pb_packet_info[i];
 }

@@ -46,6 +46,12 @@ uint16_t pb_frame_encode(uint8_t *out, uint8_t type, uint8_t seq, const void *pa
 /** Builds the index pb_packet_lookup() uses (else its first call does). */
 void pb_packet_lookup_init(void);
 
+/** pb_packet_index() of an unknown type. */
+#define PB_PACKET_NONE 0xFFu
+
+/** \return the index of `type` in pb_packet_info, or PB_PACKET_NONE if the type is unknown. */
+uint8_t pb_packet_index(uint8_t type);
+
 /** \return the packet table entry of `type`, or NULL if the type is unknown. */
 const PB_FLASH pb_packet_info_t *pb_packet_lookup(uint8_t type);
 

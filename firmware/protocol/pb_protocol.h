@@ -19,11 +19,11 @@
 #define PB_FLASH
 #endif
 
-#define PB_PROTOCOL_VERSION 1
+#define PB_PROTOCOL_VERSION 2
 #define PB_FW_MAJOR 0
 #define PB_FW_MINOR 1
 #define PB_FW_PATCH 0
-#define PB_LAYOUT_HASH 0xFBAC1F50UL
+#define PB_LAYOUT_HASH 0xC4D4A61DUL
 #define PB_FRAME_HEADER_SIZE 3
 #define PB_FRAME_CRC_SIZE 2
 #define PB_MAX_PAYLOAD 120
@@ -40,6 +40,7 @@
 #define PB_LOCO_MODE_TELEOP 2
 #define PB_LOCO_MODE_LINE_FOLLOW 3
 #define PB_LOCO_MODE_FAILSAFE 4
+#define PB_LOCO_MODE_TRACK 5
 
 /* line_follow_status: State of the line follower. */
 #define PB_LINE_FOLLOW_STATUS_OFF 0
@@ -87,6 +88,13 @@
 #define PB_ERROR_CODE_BAD_ARGUMENT 9
 #define PB_ERROR_CODE_FRAMING 10
 #define PB_ERROR_CODE_BUSY 11
+#define PB_ERROR_CODE_BAD_SEQUENCE 12
+
+/* movement_outcome: How a queued movement ended (movement_done, movement_log). */
+#define PB_MOVEMENT_OUTCOME_FINISHED 0
+#define PB_MOVEMENT_OUTCOME_STOPPED 1
+#define PB_MOVEMENT_OUTCOME_FAILSAFE 2
+#define PB_MOVEMENT_OUTCOME_DROPPED 3
 
 /* debug_module: The firmware module that wrote a debug text. */
 #define PB_DEBUG_MODULE_MAIN 0
@@ -97,6 +105,34 @@
 #define PB_DEBUG_MODULE_SENSORS 5
 #define PB_DEBUG_MODULE_SETTINGS 6
 #define PB_DEBUG_MODULE_SCHEDULER 7
+#define PB_DEBUG_MODULE_TRACK 8
+
+/* track_action: What the `track` command asks of the track behaviour. */
+#define PB_TRACK_ACTION_STOP 0
+#define PB_TRACK_ACTION_START 1
+#define PB_TRACK_ACTION_REVERSE 2
+
+/* track_status: What the track behaviour is doing. */
+#define PB_TRACK_STATUS_OFF 0
+#define PB_TRACK_STATUS_FOLLOWING 1
+#define PB_TRACK_STATUS_KEEPING_DISTANCE 2
+#define PB_TRACK_STATUS_DETOUR 3
+#define PB_TRACK_STATUS_TURNING 4
+#define PB_TRACK_STATUS_LOST 5
+
+/* line_flags: What the line sensor sees. */
+#define PB_LINE_FLAG_SEEN 0x01u
+#define PB_LINE_FLAG_LOST 0x02u
+
+/* led_flags: The status LEDs (indicators.led). */
+#define PB_LED_FLAG_ALIVE 0x01u
+#define PB_LED_FLAG_LINE 0x02u
+#define PB_LED_FLAG_FAILSAFE 0x04u
+#define PB_LED_FLAG_TOKEN 0x08u
+
+/* proximity_flags: What an IR receiver hears. */
+#define PB_PROXIMITY_FLAG_OBSTACLE 0x01u
+#define PB_PROXIMITY_FLAG_ROBOT 0x02u
 
 /* Packet types */
 #define PB_PKT_HELLO 0x01 /**< r2h */
@@ -108,6 +144,7 @@
 #define PB_PKT_DEBUG_TEXT 0x07 /**< r2h */
 #define PB_PKT_IR_RECEIVED 0x08 /**< r2h */
 #define PB_PKT_MOVEMENT_DONE 0x09 /**< r2h */
+#define PB_PKT_MOVEMENT_LOG 0x0A /**< r2h */
 #define PB_PKT_HELLO_REQUEST 0x10 /**< h2r */
 #define PB_PKT_HEARTBEAT 0x11 /**< h2r */
 #define PB_PKT_SET_SYNC 0x12 /**< h2r, acked */
@@ -122,6 +159,8 @@
 #define PB_PKT_WHEEL_SPEEDS 0x24 /**< h2r */
 #define PB_PKT_LINE_FOLLOW 0x25 /**< h2r, acked */
 #define PB_PKT_IR_SEND 0x26 /**< h2r, acked */
+#define PB_PKT_TRACK 0x28 /**< h2r, acked */
+#define PB_PKT_READ_MOVEMENTS 0x27 /**< h2r, acked */
 
 /** Gains of a discrete PID controller: u = kp*e + ki*sum(e) + kd*(e - e_prev), the sum clamped to +-i_limit. */
 typedef struct PB_PACKED {
@@ -138,7 +177,7 @@ PB_STATIC_ASSERT(offsetof(pb_pid_t, i_limit) == 12, "pb_pid_t.i_limit offset");
 
 /** What one IR receiver currently sees. */
 typedef struct PB_PACKED {
-    uint8_t flags; /**< bit0 obstacle (own reflection), bit1 robot (message heard) */
+    uint8_t flags; /**< what this receiver hears */
     uint8_t robot_id; /**< id of the last robot heard, 0 if none */
     uint8_t robot_led; /**< which LED of that robot sent it: its orientation relative to us */
     uint8_t distance; /**< distance class of that robot */
@@ -247,6 +286,17 @@ PB_STATIC_ASSERT(offsetof(pb_settings_proximity_t, ir_power) == 0, "pb_settings_
 PB_STATIC_ASSERT(offsetof(pb_settings_proximity_t, beacon_period_ms) == 1, "pb_settings_proximity_t.beacon_period_ms offset");
 PB_STATIC_ASSERT(offsetof(pb_settings_proximity_t, hold_ms) == 3, "pb_settings_proximity_t.hold_ms offset");
 
+/** The track behaviour (thesis A.3): decentralized line following with distance keeping, a token passed between robots, detours round obstacles. */
+typedef struct PB_PACKED {
+    float speed_mps; /**< cruise speed on the line [m/s] */
+    uint8_t token_boost_percent; /**< the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead [percent] */
+    uint8_t token_origin_id; /**< the robot with this id creates the token at its first start; 0: none does */
+} pb_settings_track_t;
+PB_STATIC_ASSERT(sizeof(pb_settings_track_t) == 6, "pb_settings_track_t size");
+PB_STATIC_ASSERT(offsetof(pb_settings_track_t, speed_mps) == 0, "pb_settings_track_t.speed_mps offset");
+PB_STATIC_ASSERT(offsetof(pb_settings_track_t, token_boost_percent) == 4, "pb_settings_track_t.token_boost_percent offset");
+PB_STATIC_ASSERT(offsetof(pb_settings_track_t, token_origin_id) == 5, "pb_settings_track_t.token_origin_id offset");
+
 /** Host link supervision. */
 typedef struct PB_PACKED {
     uint16_t failsafe_timeout_ms; /**< stop host-driven motion after this long without a packet; 0 = off [ms] */
@@ -265,12 +315,14 @@ PB_STATIC_ASSERT(offsetof(pb_settings_debug_t, level) == 0, "pb_settings_debug_t
 typedef struct PB_PACKED {
     uint32_t time_ms; /**< robot time since reset [ms] */
     uint16_t tick_max_us; /**< longest main loop tick since the last state packet [us] */
-    uint16_t overruns; /**< main loop ticks that overran their period */
+    uint16_t overruns; /**< main loop ticks that overran their period (since reset) */
+    uint32_t last_overrun_ms; /**< robot time of the latest overrun, 0 if none [ms] */
 } pb_state_time_t;
-PB_STATIC_ASSERT(sizeof(pb_state_time_t) == 8, "pb_state_time_t size");
+PB_STATIC_ASSERT(sizeof(pb_state_time_t) == 12, "pb_state_time_t size");
 PB_STATIC_ASSERT(offsetof(pb_state_time_t, time_ms) == 0, "pb_state_time_t.time_ms offset");
 PB_STATIC_ASSERT(offsetof(pb_state_time_t, tick_max_us) == 4, "pb_state_time_t.tick_max_us offset");
 PB_STATIC_ASSERT(offsetof(pb_state_time_t, overruns) == 6, "pb_state_time_t.overruns offset");
+PB_STATIC_ASSERT(offsetof(pb_state_time_t, last_overrun_ms) == 8, "pb_state_time_t.last_overrun_ms offset");
 
 /** Total encoder pulse counts since reset (signed: backwards counts down). */
 typedef struct PB_PACKED {
@@ -298,7 +350,7 @@ PB_STATIC_ASSERT(offsetof(pb_state_wheels_t, pwm_right) == 6, "pb_state_wheels_t
 typedef struct PB_PACKED {
     uint16_t raw[8]; /**< lit minus dark reading per spot, left to right [adc] */
     int16_t position; /**< line position, -1000 far left .. 1000 far right [permille] */
-    uint8_t flags; /**< bit0 line seen, bit1 line lost (timeout) */
+    uint8_t flags; /**< line seen, line lost */
 } pb_state_line_t;
 PB_STATIC_ASSERT(sizeof(pb_state_line_t) == 19, "pb_state_line_t size");
 PB_STATIC_ASSERT(offsetof(pb_state_line_t, raw) == 0, "pb_state_line_t.raw offset");
@@ -374,7 +426,7 @@ typedef struct PB_PACKED {
     uint8_t mode; /**< idle, movement, teleop, line_follow, failsafe */
     uint8_t queue_length; /**< movements waiting, including the running one */
     uint16_t current_id; /**< id of the running movement, 0 if none */
-    uint16_t finished_id; /**< id of the last finished movement, 0 if none */
+    uint16_t finished_id; /**< id of the last movement that ran to its end (outcome finished), 0 if none */
 } pb_state_locomotion_t;
 PB_STATIC_ASSERT(sizeof(pb_state_locomotion_t) == 6, "pb_state_locomotion_t size");
 PB_STATIC_ASSERT(offsetof(pb_state_locomotion_t, mode) == 0, "pb_state_locomotion_t.mode offset");
@@ -382,11 +434,24 @@ PB_STATIC_ASSERT(offsetof(pb_state_locomotion_t, queue_length) == 1, "pb_state_l
 PB_STATIC_ASSERT(offsetof(pb_state_locomotion_t, current_id) == 2, "pb_state_locomotion_t.current_id offset");
 PB_STATIC_ASSERT(offsetof(pb_state_locomotion_t, finished_id) == 4, "pb_state_locomotion_t.finished_id offset");
 
+/** The track behaviour (thesis A.3). */
+typedef struct PB_PACKED {
+    uint8_t status; /**< what the behaviour is doing */
+    uint8_t token; /**< 1 while this robot holds the token (also LED `token`) */
+    uint16_t token_visits; /**< times the token came to this robot from another robot since reset */
+    uint8_t met_id; /**< the robot met last: heard close by IR and greeted with an IR message; 0 if none */
+} pb_state_track_t;
+PB_STATIC_ASSERT(sizeof(pb_state_track_t) == 5, "pb_state_track_t size");
+PB_STATIC_ASSERT(offsetof(pb_state_track_t, status) == 0, "pb_state_track_t.status offset");
+PB_STATIC_ASSERT(offsetof(pb_state_track_t, token) == 1, "pb_state_track_t.token offset");
+PB_STATIC_ASSERT(offsetof(pb_state_track_t, token_visits) == 2, "pb_state_track_t.token_visits offset");
+PB_STATIC_ASSERT(offsetof(pb_state_track_t, met_id) == 4, "pb_state_track_t.met_id offset");
+
 /** Link error counters since reset. */
 typedef struct PB_PACKED {
-    uint16_t crc; /**< frames dropped for a bad CRC */
-    uint16_t framing; /**< frames dropped for bad SLIP, too short or too long */
-    uint16_t rejected; /**< packets refused: unknown type, bad length, bad argument */
+    uint16_t crc; /**< frames whose CRC failed */
+    uint16_t framing; /**< runs of received bytes (between two ENDs) that made no frame: bad SLIP, shorter than 5 or longer than 125 bytes */
+    uint16_t rejected; /**< frames with a sound CRC that were refused, for any reason */
     uint16_t rx_overflow; /**< bytes lost to a full receive buffer */
     uint16_t tx_dropped; /**< packets not sent because the transmit buffer was full */
 } pb_state_errors_t;
@@ -413,10 +478,11 @@ typedef struct PB_PACKED {
     pb_settings_geometry_t geometry; /**< Robot geometry, used by locomotion and host odometry. */
     pb_settings_motors_t motors; /**< Motor drive limits. */
     pb_settings_proximity_t proximity; /**< IR proximity: beacons to other robots and obstacle detection. */
+    pb_settings_track_t track; /**< The track behaviour (thesis A.3): decentralized line following with distance keeping, a token passed between robots, detours round obstacles. */
     pb_settings_link_t link; /**< Host link supervision. */
     pb_settings_debug_t debug; /**< Debug text sent to the host. */
 } pb_settings_t;
-PB_STATIC_ASSERT(sizeof(pb_settings_t) == 169, "pb_settings_t size");
+PB_STATIC_ASSERT(sizeof(pb_settings_t) == 175, "pb_settings_t size");
 PB_STATIC_ASSERT(offsetof(pb_settings_t, identity) == 0, "pb_settings_t.identity offset");
 PB_STATIC_ASSERT(offsetof(pb_settings_t, sync) == 17, "pb_settings_t.sync offset");
 PB_STATIC_ASSERT(offsetof(pb_settings_t, scheduler) == 20, "pb_settings_t.scheduler offset");
@@ -431,8 +497,9 @@ PB_STATIC_ASSERT(offsetof(pb_settings_t, encoder) == 147, "pb_settings_t.encoder
 PB_STATIC_ASSERT(offsetof(pb_settings_t, geometry) == 151, "pb_settings_t.geometry offset");
 PB_STATIC_ASSERT(offsetof(pb_settings_t, motors) == 159, "pb_settings_t.motors offset");
 PB_STATIC_ASSERT(offsetof(pb_settings_t, proximity) == 161, "pb_settings_t.proximity offset");
-PB_STATIC_ASSERT(offsetof(pb_settings_t, link) == 166, "pb_settings_t.link offset");
-PB_STATIC_ASSERT(offsetof(pb_settings_t, debug) == 168, "pb_settings_t.debug offset");
+PB_STATIC_ASSERT(offsetof(pb_settings_t, track) == 166, "pb_settings_t.track offset");
+PB_STATIC_ASSERT(offsetof(pb_settings_t, link) == 172, "pb_settings_t.link offset");
+PB_STATIC_ASSERT(offsetof(pb_settings_t, debug) == 174, "pb_settings_t.debug offset");
 
 /** Every sensor and status, mirrored robot -> host. */
 typedef struct PB_PACKED {
@@ -447,23 +514,25 @@ typedef struct PB_PACKED {
     pb_state_power_t power; /**< Battery and MCU. */
     pb_state_indicators_t indicators; /**< LEDs and IR transmit power. */
     pb_state_locomotion_t locomotion; /**< Movement queue and what drives the motors. */
+    pb_state_track_t track; /**< The track behaviour (thesis A.3). */
     pb_state_errors_t errors; /**< Link error counters since reset. */
 } pb_robot_state_t;
-PB_STATIC_ASSERT(sizeof(pb_robot_state_t) == 88, "pb_robot_state_t size");
+PB_STATIC_ASSERT(sizeof(pb_robot_state_t) == 97, "pb_robot_state_t size");
 PB_STATIC_ASSERT(offsetof(pb_robot_state_t, time) == 0, "pb_robot_state_t.time offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, encoders) == 8, "pb_robot_state_t.encoders offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, wheels) == 16, "pb_robot_state_t.wheels offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, line) == 24, "pb_robot_state_t.line offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, line_follow) == 43, "pb_robot_state_t.line_follow offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, proximity) == 45, "pb_robot_state_t.proximity offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, colour) == 53, "pb_robot_state_t.colour offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, accel) == 58, "pb_robot_state_t.accel offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, power) == 64, "pb_robot_state_t.power offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, indicators) == 70, "pb_robot_state_t.indicators offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, locomotion) == 72, "pb_robot_state_t.locomotion offset");
-PB_STATIC_ASSERT(offsetof(pb_robot_state_t, errors) == 78, "pb_robot_state_t.errors offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, encoders) == 12, "pb_robot_state_t.encoders offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, wheels) == 20, "pb_robot_state_t.wheels offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, line) == 28, "pb_robot_state_t.line offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, line_follow) == 47, "pb_robot_state_t.line_follow offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, proximity) == 49, "pb_robot_state_t.proximity offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, colour) == 57, "pb_robot_state_t.colour offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, accel) == 62, "pb_robot_state_t.accel offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, power) == 68, "pb_robot_state_t.power offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, indicators) == 74, "pb_robot_state_t.indicators offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, locomotion) == 76, "pb_robot_state_t.locomotion offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, track) == 82, "pb_robot_state_t.track offset");
+PB_STATIC_ASSERT(offsetof(pb_robot_state_t, errors) == 87, "pb_robot_state_t.errors offset");
 
-/** Identity, sent on connect, at reset and in answer to `hello_request`. */
+/** Identity and session, sent at reset and in answer to `hello_request`. */
 typedef struct PB_PACKED {
     uint8_t robot_id; /**< settings.identity.robot_id */
     char name[16]; /**< settings.identity.name */
@@ -474,8 +543,10 @@ typedef struct PB_PACKED {
     uint32_t layout_hash; /**< hash of every packet, settings and state layout */
     uint16_t settings_size; /**< sizeof(settings) [bytes] */
     uint16_t state_size; /**< sizeof(robot_state) [bytes] */
+    uint8_t session_resumed; /**< 1: the hello_request named the session the robot already served (its duplicate history is this host's); 0: a new session, and in the hello sent at reset */
+    uint16_t settings_crc; /**< CRC-16/CCITT-FALSE of the settings struct as it is now: equal to a cached copy's CRC, the cache is current */
 } pb_hello_t;
-PB_STATIC_ASSERT(sizeof(pb_hello_t) == 30, "pb_hello_t size");
+PB_STATIC_ASSERT(sizeof(pb_hello_t) == 33, "pb_hello_t size");
 PB_STATIC_ASSERT(offsetof(pb_hello_t, robot_id) == 0, "pb_hello_t.robot_id offset");
 PB_STATIC_ASSERT(offsetof(pb_hello_t, name) == 1, "pb_hello_t.name offset");
 PB_STATIC_ASSERT(offsetof(pb_hello_t, fw_major) == 17, "pb_hello_t.fw_major offset");
@@ -485,15 +556,17 @@ PB_STATIC_ASSERT(offsetof(pb_hello_t, protocol_version) == 20, "pb_hello_t.proto
 PB_STATIC_ASSERT(offsetof(pb_hello_t, layout_hash) == 22, "pb_hello_t.layout_hash offset");
 PB_STATIC_ASSERT(offsetof(pb_hello_t, settings_size) == 26, "pb_hello_t.settings_size offset");
 PB_STATIC_ASSERT(offsetof(pb_hello_t, state_size) == 28, "pb_hello_t.state_size offset");
-#define PB_HELLO_SIZE 30
+PB_STATIC_ASSERT(offsetof(pb_hello_t, session_resumed) == 30, "pb_hello_t.session_resumed offset");
+PB_STATIC_ASSERT(offsetof(pb_hello_t, settings_crc) == 31, "pb_hello_t.settings_crc offset");
+#define PB_HELLO_SIZE 33
 
 /** The whole robot_state, sent every sync period in full mode. */
 typedef struct PB_PACKED {
     pb_robot_state_t state; /**< robot state */
 } pb_state_full_t;
-PB_STATIC_ASSERT(sizeof(pb_state_full_t) == 88, "pb_state_full_t size");
+PB_STATIC_ASSERT(sizeof(pb_state_full_t) == 97, "pb_state_full_t size");
 PB_STATIC_ASSERT(offsetof(pb_state_full_t, state) == 0, "pb_state_full_t.state offset");
-#define PB_STATE_FULL_SIZE 88
+#define PB_STATE_FULL_SIZE 97
 
 /** Encoders, wheel speeds and line position, sent every sync period in reduced mode. */
 typedef struct PB_PACKED {
@@ -547,6 +620,7 @@ PB_STATIC_ASSERT(sizeof(pb_settings_data_t) == 67, "pb_settings_data_t size");
 PB_STATIC_ASSERT(offsetof(pb_settings_data_t, offset) == 0, "pb_settings_data_t.offset offset");
 PB_STATIC_ASSERT(offsetof(pb_settings_data_t, length) == 2, "pb_settings_data_t.length offset");
 PB_STATIC_ASSERT(offsetof(pb_settings_data_t, data) == 3, "pb_settings_data_t.data offset");
+#define PB_SETTINGS_DATA_HEAD_SIZE 3 /**< the fixed fields before the tail */
 #define PB_SETTINGS_DATA_MIN_SIZE 3
 #define PB_SETTINGS_DATA_MAX_SIZE 67
 
@@ -560,6 +634,7 @@ PB_STATIC_ASSERT(sizeof(pb_debug_text_t) == 98, "pb_debug_text_t size");
 PB_STATIC_ASSERT(offsetof(pb_debug_text_t, module) == 0, "pb_debug_text_t.module offset");
 PB_STATIC_ASSERT(offsetof(pb_debug_text_t, level) == 1, "pb_debug_text_t.level offset");
 PB_STATIC_ASSERT(offsetof(pb_debug_text_t, text) == 2, "pb_debug_text_t.text offset");
+#define PB_DEBUG_TEXT_HEAD_SIZE 2 /**< the fixed fields before the tail */
 #define PB_DEBUG_TEXT_MIN_SIZE 2
 #define PB_DEBUG_TEXT_MAX_SIZE 98
 
@@ -577,24 +652,49 @@ PB_STATIC_ASSERT(offsetof(pb_ir_received_t, side) == 1, "pb_ir_received_t.side o
 PB_STATIC_ASSERT(offsetof(pb_ir_received_t, sender_led) == 2, "pb_ir_received_t.sender_led offset");
 PB_STATIC_ASSERT(offsetof(pb_ir_received_t, power) == 3, "pb_ir_received_t.power offset");
 PB_STATIC_ASSERT(offsetof(pb_ir_received_t, data) == 4, "pb_ir_received_t.data offset");
+#define PB_IR_RECEIVED_HEAD_SIZE 4 /**< the fixed fields before the tail */
 #define PB_IR_RECEIVED_MIN_SIZE 4
 #define PB_IR_RECEIVED_MAX_SIZE 12
 
-/** A queued movement finished (also visible as locomotion.finished_id in the state). */
+/** A queued movement ended, whatever the outcome; one ending at rest is sent once the wheels stand still (at most ~300 ms), one followed at once by the next at the hand-over. */
 typedef struct PB_PACKED {
     uint16_t id; /**< movement id */
+    uint8_t outcome; /**< how it ended */
+    float done; /**< how much was done, signed like the request: metres for move_straight, degrees turned for move_rotate and move_arc */
 } pb_movement_done_t;
-PB_STATIC_ASSERT(sizeof(pb_movement_done_t) == 2, "pb_movement_done_t size");
+PB_STATIC_ASSERT(sizeof(pb_movement_done_t) == 7, "pb_movement_done_t size");
 PB_STATIC_ASSERT(offsetof(pb_movement_done_t, id) == 0, "pb_movement_done_t.id offset");
-#define PB_MOVEMENT_DONE_SIZE 2
+PB_STATIC_ASSERT(offsetof(pb_movement_done_t, outcome) == 2, "pb_movement_done_t.outcome offset");
+PB_STATIC_ASSERT(offsetof(pb_movement_done_t, done) == 3, "pb_movement_done_t.done offset");
+#define PB_MOVEMENT_DONE_SIZE 7
 
-/** Ask for `hello`. */
+/** The last 16 movement results and the queue now, in answer to `read_movements` (then `ack`). */
+typedef struct PB_PACKED {
+    uint16_t current_id; /**< id of the running movement, 0 if none */
+    uint8_t queue_length; /**< movements waiting, including the running one */
+    uint8_t count; /**< valid entries in the arrays, 0..16 */
+    uint16_t ids[16]; /**< movement ids, oldest first */
+    uint8_t outcomes[16]; /**< how each ended */
+    float done[16]; /**< how much each did (as in movement_done) */
+} pb_movement_log_t;
+PB_STATIC_ASSERT(sizeof(pb_movement_log_t) == 116, "pb_movement_log_t size");
+PB_STATIC_ASSERT(offsetof(pb_movement_log_t, current_id) == 0, "pb_movement_log_t.current_id offset");
+PB_STATIC_ASSERT(offsetof(pb_movement_log_t, queue_length) == 2, "pb_movement_log_t.queue_length offset");
+PB_STATIC_ASSERT(offsetof(pb_movement_log_t, count) == 3, "pb_movement_log_t.count offset");
+PB_STATIC_ASSERT(offsetof(pb_movement_log_t, ids) == 4, "pb_movement_log_t.ids offset");
+PB_STATIC_ASSERT(offsetof(pb_movement_log_t, outcomes) == 36, "pb_movement_log_t.outcomes offset");
+PB_STATIC_ASSERT(offsetof(pb_movement_log_t, done) == 52, "pb_movement_log_t.done offset");
+#define PB_MOVEMENT_LOG_SIZE 116
+
+/** Ask for `hello`; starts a new host session unless `session` is the one the robot serves. */
 typedef struct PB_PACKED {
     uint16_t host_protocol_version; /**< protocol version of the host */
+    uint32_t session; /**< drawn at random (non-zero) when the host starts, kept across its reconnects; 0 = no session */
 } pb_hello_request_t;
-PB_STATIC_ASSERT(sizeof(pb_hello_request_t) == 2, "pb_hello_request_t size");
+PB_STATIC_ASSERT(sizeof(pb_hello_request_t) == 6, "pb_hello_request_t size");
 PB_STATIC_ASSERT(offsetof(pb_hello_request_t, host_protocol_version) == 0, "pb_hello_request_t.host_protocol_version offset");
-#define PB_HELLO_REQUEST_SIZE 2
+PB_STATIC_ASSERT(offsetof(pb_hello_request_t, session) == 2, "pb_hello_request_t.session offset");
+#define PB_HELLO_REQUEST_SIZE 6
 
 /** Keeps the link failsafe from stopping the robot when the host has nothing else to say. */
 typedef struct PB_PACKED {
@@ -622,7 +722,8 @@ PB_STATIC_ASSERT(sizeof(pb_update_settings_t) == 67, "pb_update_settings_t size"
 PB_STATIC_ASSERT(offsetof(pb_update_settings_t, offset) == 0, "pb_update_settings_t.offset offset");
 PB_STATIC_ASSERT(offsetof(pb_update_settings_t, length) == 2, "pb_update_settings_t.length offset");
 PB_STATIC_ASSERT(offsetof(pb_update_settings_t, data) == 3, "pb_update_settings_t.data offset");
-#define PB_UPDATE_SETTINGS_MIN_SIZE 3
+#define PB_UPDATE_SETTINGS_HEAD_SIZE 3 /**< the fixed fields before the tail */
+#define PB_UPDATE_SETTINGS_MIN_SIZE 4
 #define PB_UPDATE_SETTINGS_MAX_SIZE 67
 
 /** Ask for the whole settings struct as `settings_data` chunks, followed by `ack`. */
@@ -645,7 +746,7 @@ PB_STATIC_ASSERT(sizeof(pb_load_defaults_t) == 0, "pb_load_defaults_t size");
 
 /** Queue a straight movement; negative distance drives backwards. */
 typedef struct PB_PACKED {
-    uint16_t id; /**< movement id, non-zero, reported when finished */
+    uint16_t id; /**< movement id, non-zero, reported in movement_done when it ends */
     float distance_m; /**< distance [m] */
     float speed_mps; /**< cruise speed, > 0 [m/s] */
 } pb_move_straight_t;
@@ -681,7 +782,7 @@ PB_STATIC_ASSERT(offsetof(pb_move_arc_t, angle_deg) == 6, "pb_move_arc_t.angle_d
 PB_STATIC_ASSERT(offsetof(pb_move_arc_t, speed_mps) == 10, "pb_move_arc_t.speed_mps offset");
 #define PB_MOVE_ARC_SIZE 14
 
-/** Clear the movement queue and stop (braking on the profile unless `immediate`); also ends teleoperation and line following. */
+/** Stop: the running movement brakes on the profile (at once when `immediate`) and ends as stopped, queued ones are dropped; also ends teleoperation and line following. */
 typedef struct PB_PACKED {
     uint8_t immediate; /**< 1: motors off at once */
 } pb_stop_t;
@@ -689,7 +790,7 @@ PB_STATIC_ASSERT(sizeof(pb_stop_t) == 1, "pb_stop_t size");
 PB_STATIC_ASSERT(offsetof(pb_stop_t, immediate) == 0, "pb_stop_t.immediate offset");
 #define PB_STOP_SIZE 1
 
-/** Teleoperation: hold these wheel speeds (per-wheel PID) until the next command or the link failsafe. */
+/** Teleoperation: hold these wheel speeds (per-wheel PID) until the next command or the link failsafe. Ends a running movement (stopped) and drops queued ones. */
 typedef struct PB_PACKED {
     float left_mps; /**< left wheel [m/s] */
     float right_mps; /**< right wheel [m/s] */
@@ -699,7 +800,7 @@ PB_STATIC_ASSERT(offsetof(pb_wheel_speeds_t, left_mps) == 0, "pb_wheel_speeds_t.
 PB_STATIC_ASSERT(offsetof(pb_wheel_speeds_t, right_mps) == 4, "pb_wheel_speeds_t.right_mps offset");
 #define PB_WHEEL_SPEEDS_SIZE 8
 
-/** Start or stop line following; speed 0 keeps settings.line_follow.speed_mps. */
+/** Start or stop line following; speed 0 keeps settings.line_follow.speed_mps. Starting ends a running movement (stopped) and drops queued ones. */
 typedef struct PB_PACKED {
     uint8_t run; /**< 1 start, 0 stop */
     uint8_t colour_mode; /**< plain or colour segments */
@@ -719,20 +820,36 @@ typedef struct PB_PACKED {
 PB_STATIC_ASSERT(sizeof(pb_ir_send_t) == 9, "pb_ir_send_t size");
 PB_STATIC_ASSERT(offsetof(pb_ir_send_t, power) == 0, "pb_ir_send_t.power offset");
 PB_STATIC_ASSERT(offsetof(pb_ir_send_t, data) == 1, "pb_ir_send_t.data offset");
+#define PB_IR_SEND_HEAD_SIZE 1 /**< the fixed fields before the tail */
 #define PB_IR_SEND_MIN_SIZE 1
 #define PB_IR_SEND_MAX_SIZE 9
 
+/** Start, stop or reverse the track behaviour (thesis A.3). Starting ends a running movement (stopped) and drops queued ones; `stop`, `line_follow`, `wheel_speeds` and movements end the behaviour too. */
+typedef struct PB_PACKED {
+    uint8_t action; /**< stop, start or reverse */
+} pb_track_t;
+PB_STATIC_ASSERT(sizeof(pb_track_t) == 1, "pb_track_t size");
+PB_STATIC_ASSERT(offsetof(pb_track_t, action) == 0, "pb_track_t.action offset");
+#define PB_TRACK_SIZE 1
+
+/** Ask for `movement_log` (then `ack`): how the last 16 movements ended, for a host that was away. */
+typedef struct PB_PACKED {
+} pb_read_movements_t;
+PB_STATIC_ASSERT(sizeof(pb_read_movements_t) == 0, "pb_read_movements_t size");
+#define PB_READ_MOVEMENTS_SIZE 0
+
 /* Tables (pb_protocol_tables.c) */
-typedef struct { uint8_t type; uint8_t min_size; uint8_t max_size; uint8_t dir; uint8_t needs_ack; } pb_packet_info_t;
+/** A packet type: payload size bounds, direction, acknowledged, idempotent (a read: answered every time). */
+typedef struct { uint8_t type; uint8_t min_size; uint8_t max_size; uint8_t dir; uint8_t needs_ack; uint8_t idempotent; } pb_packet_info_t;
 #define PB_DIR_R2H 0
 #define PB_DIR_H2R 1
-#define PB_PACKET_INFO_COUNT 23
+#define PB_PACKET_INFO_COUNT 26
 extern const PB_FLASH pb_packet_info_t pb_packet_info[PB_PACKET_INFO_COUNT];
 
 enum { PB_FIELD_U8, PB_FIELD_I8, PB_FIELD_U16, PB_FIELD_I16, PB_FIELD_U32, PB_FIELD_I32, PB_FIELD_F32, PB_FIELD_CHAR };
 /** One leaf of settings: where it is, what it is, and the range a write must respect. */
 typedef struct { uint16_t offset; uint8_t elem_size; uint8_t count; uint8_t type; float min; float max; } pb_settings_field_t;
-#define PB_SETTINGS_FIELD_COUNT 42
+#define PB_SETTINGS_FIELD_COUNT 45
 extern const PB_FLASH pb_settings_field_t pb_settings_fields[PB_SETTINGS_FIELD_COUNT];
 extern const PB_FLASH pb_settings_t pb_settings_defaults;
 

@@ -2,29 +2,32 @@
 #include "pb_protocol.h"
 
 const PB_FLASH pb_packet_info_t pb_packet_info[PB_PACKET_INFO_COUNT] = {
-    {PB_PKT_HELLO, 30, 30, PB_DIR_R2H, 0},
-    {PB_PKT_STATE_FULL, 88, 88, PB_DIR_R2H, 0},
-    {PB_PKT_STATE_REDUCED, 19, 19, PB_DIR_R2H, 0},
-    {PB_PKT_ACK, 1, 1, PB_DIR_R2H, 0},
-    {PB_PKT_ERROR, 5, 5, PB_DIR_R2H, 0},
-    {PB_PKT_SETTINGS_DATA, 3, 67, PB_DIR_R2H, 0},
-    {PB_PKT_DEBUG_TEXT, 2, 98, PB_DIR_R2H, 0},
-    {PB_PKT_IR_RECEIVED, 4, 12, PB_DIR_R2H, 0},
-    {PB_PKT_MOVEMENT_DONE, 2, 2, PB_DIR_R2H, 0},
-    {PB_PKT_HELLO_REQUEST, 2, 2, PB_DIR_H2R, 0},
-    {PB_PKT_HEARTBEAT, 0, 0, PB_DIR_H2R, 0},
-    {PB_PKT_SET_SYNC, 3, 3, PB_DIR_H2R, 1},
-    {PB_PKT_UPDATE_SETTINGS, 3, 67, PB_DIR_H2R, 1},
-    {PB_PKT_READ_SETTINGS, 0, 0, PB_DIR_H2R, 1},
-    {PB_PKT_SAVE_SETTINGS, 0, 0, PB_DIR_H2R, 1},
-    {PB_PKT_LOAD_DEFAULTS, 0, 0, PB_DIR_H2R, 1},
-    {PB_PKT_MOVE_STRAIGHT, 10, 10, PB_DIR_H2R, 1},
-    {PB_PKT_MOVE_ROTATE, 10, 10, PB_DIR_H2R, 1},
-    {PB_PKT_MOVE_ARC, 14, 14, PB_DIR_H2R, 1},
-    {PB_PKT_STOP, 1, 1, PB_DIR_H2R, 1},
-    {PB_PKT_WHEEL_SPEEDS, 8, 8, PB_DIR_H2R, 0},
-    {PB_PKT_LINE_FOLLOW, 6, 6, PB_DIR_H2R, 1},
-    {PB_PKT_IR_SEND, 1, 9, PB_DIR_H2R, 1},
+    {PB_PKT_HELLO, 33, 33, PB_DIR_R2H, 0, 0},
+    {PB_PKT_STATE_FULL, 97, 97, PB_DIR_R2H, 0, 0},
+    {PB_PKT_STATE_REDUCED, 19, 19, PB_DIR_R2H, 0, 0},
+    {PB_PKT_ACK, 1, 1, PB_DIR_R2H, 0, 0},
+    {PB_PKT_ERROR, 5, 5, PB_DIR_R2H, 0, 0},
+    {PB_PKT_SETTINGS_DATA, 3, 67, PB_DIR_R2H, 0, 0},
+    {PB_PKT_DEBUG_TEXT, 2, 98, PB_DIR_R2H, 0, 0},
+    {PB_PKT_IR_RECEIVED, 4, 12, PB_DIR_R2H, 0, 0},
+    {PB_PKT_MOVEMENT_DONE, 7, 7, PB_DIR_R2H, 0, 0},
+    {PB_PKT_MOVEMENT_LOG, 116, 116, PB_DIR_R2H, 0, 0},
+    {PB_PKT_HELLO_REQUEST, 6, 6, PB_DIR_H2R, 0, 0},
+    {PB_PKT_HEARTBEAT, 0, 0, PB_DIR_H2R, 0, 0},
+    {PB_PKT_SET_SYNC, 3, 3, PB_DIR_H2R, 1, 0},
+    {PB_PKT_UPDATE_SETTINGS, 4, 67, PB_DIR_H2R, 1, 0},
+    {PB_PKT_READ_SETTINGS, 0, 0, PB_DIR_H2R, 1, 1},
+    {PB_PKT_SAVE_SETTINGS, 0, 0, PB_DIR_H2R, 1, 0},
+    {PB_PKT_LOAD_DEFAULTS, 0, 0, PB_DIR_H2R, 1, 0},
+    {PB_PKT_MOVE_STRAIGHT, 10, 10, PB_DIR_H2R, 1, 0},
+    {PB_PKT_MOVE_ROTATE, 10, 10, PB_DIR_H2R, 1, 0},
+    {PB_PKT_MOVE_ARC, 14, 14, PB_DIR_H2R, 1, 0},
+    {PB_PKT_STOP, 1, 1, PB_DIR_H2R, 1, 0},
+    {PB_PKT_WHEEL_SPEEDS, 8, 8, PB_DIR_H2R, 0, 0},
+    {PB_PKT_LINE_FOLLOW, 6, 6, PB_DIR_H2R, 1, 0},
+    {PB_PKT_IR_SEND, 1, 9, PB_DIR_H2R, 1, 0},
+    {PB_PKT_TRACK, 1, 1, PB_DIR_H2R, 1, 0},
+    {PB_PKT_READ_MOVEMENTS, 0, 0, PB_DIR_H2R, 1, 1},
 };
 
 const PB_FLASH pb_settings_field_t pb_settings_fields[PB_SETTINGS_FIELD_COUNT] = {
@@ -68,8 +71,11 @@ const PB_FLASH pb_settings_field_t pb_settings_fields[PB_SETTINGS_FIELD_COUNT] =
     {161, 1, 1, PB_FIELD_U8, 0x0.0p+0f, 0x1.9000000000000p+6f}, /* proximity.ir_power */
     {162, 2, 1, PB_FIELD_U16, 0x1.4000000000000p+3f, 0x1.3880000000000p+13f}, /* proximity.beacon_period_ms */
     {164, 2, 1, PB_FIELD_U16, 0x1.4000000000000p+3f, 0x1.3880000000000p+13f}, /* proximity.hold_ms */
-    {166, 2, 1, PB_FIELD_U16, 0x0.0p+0f, 0x1.d4c0000000000p+15f}, /* link.failsafe_timeout_ms */
-    {168, 1, 1, PB_FIELD_U8, 0x0.0p+0f, 0x1.0000000000000p+2f}, /* debug.level */
+    {166, 4, 1, PB_FIELD_F32, 0x1.eb851e0000000p-6f, 0x1.3333340000000p-2f}, /* track.speed_mps */
+    {170, 1, 1, PB_FIELD_U8, 0x0.0p+0f, 0x1.9000000000000p+6f}, /* track.token_boost_percent */
+    {171, 1, 1, PB_FIELD_U8, 0x0.0p+0f, 0x1.fc00000000000p+7f}, /* track.token_origin_id */
+    {172, 2, 1, PB_FIELD_U16, 0x0.0p+0f, 0x1.d4c0000000000p+15f}, /* link.failsafe_timeout_ms */
+    {174, 1, 1, PB_FIELD_U8, 0x0.0p+0f, 0x1.0000000000000p+2f}, /* debug.level */
 };
 
 const PB_FLASH pb_settings_t pb_settings_defaults = {
@@ -87,6 +93,7 @@ const PB_FLASH pb_settings_t pb_settings_defaults = {
     .geometry = {.wheel_diameter_m = 0x1.26e9780000000p-7f, .wheel_base_m = 0x1.a9fbe80000000p-6f},
     .motors = {.pwm_limit = 1000},
     .proximity = {.ir_power = 100, .beacon_period_ms = 40, .hold_ms = 250},
+    .track = {.speed_mps = 0x1.eb851e0000000p-4f, .token_boost_percent = 100, .token_origin_id = 1},
     .link = {.failsafe_timeout_ms = 1000},
     .debug = {.level = 1},
 };

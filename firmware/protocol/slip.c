@@ -5,14 +5,18 @@ void slip_decoder_init(slip_decoder_t *d)
     d->len = 0;
     d->escaped = 0;
     d->broken = 0;
-    d->delivered = 0;
+    d->overflow = 0;
+    d->ended = 0;
+    d->dropped = 0;
 }
 
 slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte)
 {
-    if (d->delivered) {
-        d->delivered = 0;
+    if (d->ended) { /* what the END completed stayed readable until now */
+        d->ended = 0;
         d->len = 0;
+        d->dropped = 0;
+        d->overflow = 0;
     }
     if (byte == SLIP_END) {
         slip_result_t r = SLIP_NONE;
@@ -20,32 +24,28 @@ slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte)
             r = SLIP_ERROR;
         else if (d->len)
             r = SLIP_FRAME;
-        /* A delivered frame stays readable in buf until the next byte arrives. */
         d->escaped = 0;
         d->broken = 0;
-        d->delivered = (r == SLIP_FRAME);
-        if (!d->delivered)
-            d->len = 0;
+        d->ended = 1;
         return r;
     }
-    if (d->broken)
-        return SLIP_NONE;
     if (d->escaped) {
         d->escaped = 0;
         if (byte == SLIP_ESC_END)
             byte = SLIP_END;
         else if (byte == SLIP_ESC_ESC)
             byte = SLIP_ESC;
-        else {
+        else
             d->broken = 1;
-            return SLIP_NONE;
-        }
     } else if (byte == SLIP_ESC) {
-        d->escaped = 1;
+        d->escaped = 1; /* counted with the byte it escapes */
         return SLIP_NONE;
     }
-    if (d->len >= sizeof d->buf) {
+    if (d->broken || d->len >= sizeof d->buf) { /* counted for the error's detail, not kept */
+        d->overflow |= !d->broken;
         d->broken = 1;
+        if (d->dropped < 0xFFFFu - sizeof d->buf)
+            d->dropped++;
         return SLIP_NONE;
     }
     d->buf[d->len++] = byte;

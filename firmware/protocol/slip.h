@@ -19,7 +19,7 @@
 typedef enum {
     SLIP_NONE = 0,     /**< nothing complete yet */
     SLIP_FRAME,        /**< a frame is complete in buf[0..len) */
-    SLIP_ERROR         /**< a frame was dropped: bad escape or longer than the buffer */
+    SLIP_ERROR         /**< a frame was dropped: bad escape, or longer than the buffer (`overflow`) */
 } slip_result_t;
 
 /** Decoder state; the buffer holds the largest protocol frame. */
@@ -28,14 +28,22 @@ typedef struct {
     uint8_t len;
     uint8_t escaped;   /**< the previous byte was ESC */
     uint8_t broken;    /**< the frame is dropped at the next END */
-    uint8_t delivered; /**< buf holds a delivered frame; the next byte starts a new one */
+    uint8_t overflow;  /**< it is dropped for being longer than buf */
+    uint8_t ended;     /**< an END completed a frame or an error; the next byte starts a new one */
+    uint16_t dropped;  /**< decoded bytes not kept in buf once the frame broke (saturating) */
 } slip_decoder_t;
+
+/** Decoded bytes of the current (or just ended) frame, those past the buffer or a broken escape included. */
+static inline uint16_t slip_seen(const slip_decoder_t *d)
+{
+    return (uint16_t)(d->len + d->dropped);
+}
 
 void slip_decoder_init(slip_decoder_t *d);
 
 /** Feeds one received byte. Empty frames (END END) are ignored.
- *  \return SLIP_FRAME when END completes a frame (valid until the next call), SLIP_ERROR when it completes
- *  a broken one. */
+ *  \return SLIP_FRAME when END completes a frame (buf, len valid until the next call), SLIP_ERROR when it
+ *  completes a broken one (slip_seen() and `overflow` tell how long it was and why, until the next call). */
 slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte);
 
 /** \return the size of `frame` once SLIP-encoded, both ENDs included. */

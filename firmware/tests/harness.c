@@ -36,6 +36,7 @@ int main(int argc, char **argv)
     suite_sensors();
     suite_debug();
     suite_scheduler();
+    suite_track();
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }

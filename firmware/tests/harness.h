@@ -37,6 +37,7 @@ void suite_proximity(void);
 void suite_sensors(void);
 void suite_debug(void);
 void suite_scheduler(void);
+void suite_track(void);
 
 /** Writes the golden frames (SLIPped) as fuzz corpus files into `dir`. */
 void golden_write_corpus(const char *dir);

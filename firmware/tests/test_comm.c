@@ -1,9 +1,10 @@
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/data.h"
 #include "harness.h"
 #include "modules/comm.h"
-#include "modules/reflector.h"
 #include "modules/settings.h"
 #include "protocol/pb_frame.h"
 #include "protocol/slip.h"
@@ -15,24 +16,53 @@ static const pb_error_t *error_packet(int n)
     return f ? (const pb_error_t *)f->payload : NULL;
 }
 
+static int hello_packet(int n, pb_hello_t *out)
+{
+    const host_frame_t *f = host_find(PB_PKT_HELLO, n);
+    if (f == NULL || f->len != sizeof *out)
+        return 0;
+    memcpy(out, f->payload, sizeof *out);
+    return 1;
+}
+
+static void hello_request(uint32_t session)
+{
+    pb_hello_request_t r = {PB_PROTOCOL_VERSION, session};
+    host_send(PB_PKT_HELLO_REQUEST, 0, &r, sizeof r);
+}
+
 static void hello_at_reset_and_on_request(void)
 {
     world_reset(5);
     world_run_ms(2);
     host_collect();
-    const host_frame_t *f = host_find(PB_PKT_HELLO, 0);
-    CHECK(f != NULL && f->len == PB_HELLO_SIZE, "hello at reset");
-    if (f) {
-        pb_hello_t h;
-        memcpy(&h, f->payload, sizeof h);
-        CHECK(h.robot_id == 5 && h.layout_hash == PB_LAYOUT_HASH && h.settings_size == sizeof(pb_settings_t) &&
-                  h.state_size == sizeof(pb_robot_state_t) && h.protocol_version == PB_PROTOCOL_VERSION, "fields");
-    }
-    pb_hello_request_t r = {1};
-    host_send(PB_PKT_HELLO_REQUEST, 0, &r, sizeof r);
+    pb_hello_t h;
+    CHECK(hello_packet(0, &h), "hello at reset");
+    CHECK(h.robot_id == 5 && h.layout_hash == PB_LAYOUT_HASH && h.settings_size == sizeof(pb_settings_t) &&
+              h.state_size == sizeof(pb_robot_state_t) && h.protocol_version == PB_PROTOCOL_VERSION &&
+              h.session_resumed == 0, "fields");
+    CHECK(h.settings_crc == pb_crc16(0xFFFF, (const uint8_t *)&settings, sizeof settings), "settings CRC");
+    hello_request(0x1234);
     world_run_ms(2);
     host_collect();
-    CHECK(host_count(PB_PKT_HELLO) == 2, "hello on request");
+    CHECK(host_count(PB_PKT_HELLO) == 2 && hello_packet(1, &h) && h.session_resumed == 0, "a new session");
+    hello_request(0x1234);
+    world_run_ms(2);
+    host_collect();
+    CHECK(hello_packet(2, &h) && h.session_resumed == 1, "the same session again: resumed");
+    hello_request(0);
+    hello_request(0);
+    world_run_ms(2);
+    host_collect();
+    CHECK(hello_packet(3, &h) && h.session_resumed == 0 && hello_packet(4, &h) && h.session_resumed == 0,
+          "session 0 is never resumed");
+    /* The CRC follows the settings. */
+    settings.line_follow.speed_mps = 0.2f;
+    hello_request(0x99);
+    world_run_ms(2);
+    host_collect();
+    CHECK(hello_packet(5, &h) && h.settings_crc == pb_crc16(0xFFFF, (const uint8_t *)&settings, sizeof settings),
+          "CRC of the settings as they are now");
 }
 
 static void state_is_reflected_at_the_configured_mode_and_period(void)
@@ -81,25 +111,72 @@ static void a_full_transmit_buffer_skips_and_counts(void)
 static void retransmitted_command_is_acked_but_not_executed_twice(void)
 {
     world_reset(1);
+    hello_request(0xABCD);
     pb_move_straight_t m = {1, 0.05f, 0.1f};
     host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m);
-    host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m);
+    host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m); /* identical: a retransmission */
     m.id = 2;
     host_send(PB_PKT_MOVE_ROTATE, 42, &m, sizeof m); /* same seq, other type: a new command */
+    m.distance_m = 0.06f;
+    host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m); /* same seq and type, other payload: a new command */
     world_run_ms(2);
     host_collect();
-    CHECK(host_count(PB_PKT_ACK) == 3, "acks %d", host_count(PB_PKT_ACK));
-    CHECK(robot_state.locomotion.queue_length == 2, "queue %u", robot_state.locomotion.queue_length);
-    /* 16 other commands later the seq is forgotten and executes again. */
+    CHECK(host_count(PB_PKT_ACK) == 4, "acks %d", host_count(PB_PKT_ACK));
+    CHECK(robot_state.locomotion.queue_length == 3, "queue %u", robot_state.locomotion.queue_length);
+    /* 16 other commands later the first is forgotten and executes again. */
     for (int i = 0; i < 16; i++) {
-        pb_set_sync_t s = {PB_SYNC_MODE_FULL, 100};
+        pb_set_sync_t s = {PB_SYNC_MODE_FULL, (uint16_t)(100 + i)};
         host_send(PB_PKT_SET_SYNC, (uint8_t)(100 + i), &s, sizeof s);
     }
     m.id = 1;
+    m.distance_m = 0.05f;
     host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m);
     world_run_ms(2);
+    CHECK(robot_state.locomotion.queue_length == 4, "queue %u", robot_state.locomotion.queue_length);
+    /* The same session resumed (a reconnect) keeps the history: a retransmission is still recognised. */
+    hello_request(0xABCD);
+    host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m);
+    world_run_ms(2);
+    CHECK(robot_state.locomotion.queue_length == 4, "resumed session: not executed twice (%u)",
+          robot_state.locomotion.queue_length);
+}
+
+static void two_hosts_in_turn_get_every_command_executed(void)
+{
+    world_reset(1);
+    /* Host A, then host B with the same sequence numbers and the same (identical!) frames: each is a new
+     * session, so nothing B sends is taken for A's. */
+    for (int host = 0; host < 2; host++) {
+        hello_request(host == 0 ? 0x1111u : 0x2222u);
+        for (uint8_t seq = 1; seq <= 5; seq++) {
+            pb_move_straight_t m = {seq, 0.01f, 0.1f};
+            host_send(PB_PKT_MOVE_STRAIGHT, seq, &m, sizeof m);
+        }
+        world_run_ms(2);
+    }
+    CHECK(robot_state.locomotion.queue_length == 10 ||
+              robot_state.locomotion.queue_length + host_count(PB_PKT_MOVEMENT_DONE) == 10,
+          "all 10 executed: queue %u", robot_state.locomotion.queue_length);
+    /* A host without a session (0) clears the history too. */
+    pb_move_straight_t m = {6, 0.01f, 0.1f};
+    host_send(PB_PKT_MOVE_STRAIGHT, 9, &m, sizeof m);
+    hello_request(0);
+    host_send(PB_PKT_MOVE_STRAIGHT, 9, &m, sizeof m);
+    world_run_ms(2);
+    CHECK(robot_state.locomotion.queue_length == 12, "queue %u", robot_state.locomotion.queue_length);
+}
+
+static void acked_commands_need_a_sequence_number(void)
+{
+    world_reset(1);
+    pb_move_straight_t m = {1, 0.05f, 0.1f};
+    host_send(PB_PKT_MOVE_STRAIGHT, 0, &m, sizeof m);
+    world_run_ms(2);
     host_collect();
-    CHECK(robot_state.locomotion.queue_length == 3, "queue %u", robot_state.locomotion.queue_length);
+    const pb_error_t *e = error_packet(0);
+    CHECK(e && e->code == PB_ERROR_CODE_BAD_SEQUENCE && e->packet_type == PB_PKT_MOVE_STRAIGHT && e->seq == 0,
+          "seq 0 refused");
+    CHECK(robot_state.locomotion.queue_length == 0 && robot_state.errors.rejected == 1, "not executed, counted");
 }
 
 static void bad_packets_are_counted_and_answered(void)
@@ -110,29 +187,93 @@ static void bad_packets_are_counted_and_answered(void)
     host_send(PB_PKT_HELLO, 4, payload, 0); /* robot-to-host type from the host */
     host_send(PB_PKT_MOVE_STRAIGHT, 5, payload, 4); /* length disagrees with the type */
     host_send(PB_PKT_MOVE_STRAIGHT, 6, payload, 10); /* id 0 */
+    pb_set_sync_t s = {PB_SYNC_MODE_FULL, 0};
+    host_send(PB_PKT_SET_SYNC, 7, &s, sizeof s); /* period 0 */
+    pb_update_settings_t u = {0, 0, {0}};
+    host_send(PB_PKT_UPDATE_SETTINGS, 8, &u, PB_UPDATE_SETTINGS_HEAD_SIZE); /* no data */
     world_run_ms(2);
     host_collect();
-    CHECK(robot_state.errors.rejected == 4, "rejected %u", robot_state.errors.rejected);
+    CHECK(robot_state.errors.rejected == 6, "rejected %u", robot_state.errors.rejected);
     const pb_error_t *e;
     CHECK((e = error_packet(0)) && e->code == PB_ERROR_CODE_UNKNOWN_TYPE && e->seq == 3 && e->packet_type == 0x7E,
           "unknown");
     CHECK((e = error_packet(1)) && e->code == PB_ERROR_CODE_UNKNOWN_TYPE && e->seq == 4, "direction");
     CHECK((e = error_packet(2)) && e->code == PB_ERROR_CODE_BAD_LENGTH && e->seq == 5 && e->detail == 4, "length");
-    CHECK((e = error_packet(3)) && e->code == PB_ERROR_CODE_BAD_ARGUMENT && e->seq == 6, "argument");
-    /* A bad CRC: counted, no answer. */
-    uint8_t frame[32], slip[70];
-    uint16_t n = pb_frame_encode(frame, PB_PKT_HEARTBEAT, 0, NULL, 0);
-    frame[n - 1] ^= 1;
+    CHECK((e = error_packet(3)) && e->code == PB_ERROR_CODE_BAD_ARGUMENT && e->seq == 6 &&
+              e->detail == offsetof(pb_move_straight_t, id), "argument");
+    CHECK((e = error_packet(4)) && e->code == PB_ERROR_CODE_BAD_ARGUMENT && e->seq == 7 &&
+              e->detail == offsetof(pb_set_sync_t, period_ms), "argument offset %u", e ? e->detail : 0);
+    CHECK((e = error_packet(5)) && e->code == PB_ERROR_CODE_BAD_LENGTH && e->seq == 8 &&
+              e->detail == PB_UPDATE_SETTINGS_HEAD_SIZE, "an update without data is refused by its size");
+
+    /* A sound CRC around a header length that disagrees with the frame: refused, not framing. */
+    uint8_t frame[PB_MAX_FRAME + 8], slip[2 * sizeof frame];
+    uint16_t n = pb_frame_encode(frame, PB_PKT_HEARTBEAT, 0, payload, 2);
+    frame[2] = 1;
+    uint16_t crc = pb_crc16(0xFFFF, frame, (uint16_t)(n - 2));
+    frame[n - 2] = (uint8_t)crc;
+    frame[n - 1] = (uint8_t)(crc >> 8);
     host_clear();
     host_send_raw(slip, slip_encode(slip, frame, n));
-    /* Too short, and a broken escape. */
-    const uint8_t junk[] = {0xC0, 1, 2, 0xC0, 1, 0xDB, 7, 0xC0};
-    host_send_raw(junk, sizeof junk);
     world_run_ms(2);
     host_collect();
-    CHECK(robot_state.errors.crc == 1 && robot_state.errors.framing == 2, "crc %u framing %u",
-          robot_state.errors.crc, robot_state.errors.framing);
-    CHECK(host_count(PB_PKT_ERROR) == 0, "no answers to unreadable frames");
+    CHECK(robot_state.errors.rejected == 7 && robot_state.errors.framing == 0, "rejected %u framing %u",
+          robot_state.errors.rejected, robot_state.errors.framing);
+    CHECK((e = error_packet(0)) && e->code == PB_ERROR_CODE_BAD_LENGTH && e->packet_type == PB_PKT_HEARTBEAT,
+          "answered with the frame's type");
+}
+
+static void unreadable_frames_are_counted_and_reported_at_a_limited_rate(void)
+{
+    world_reset(1);
+    world_run_ms(200);
+    host_collect();
+    host_clear();
+    /* A bad CRC. */
+    uint8_t frame[PB_MAX_FRAME + 8], slip[2 * sizeof frame + 2];
+    uint16_t n = pb_frame_encode(frame, PB_PKT_HEARTBEAT, 0, NULL, 0);
+    frame[n - 1] ^= 1;
+    host_send_raw(slip, slip_encode(slip, frame, n));
+    world_run_ms(150);
+    /* Too short. */
+    const uint8_t shorty[] = {0xC0, 1, 2, 0xC0};
+    host_send_raw(shorty, sizeof shorty);
+    world_run_ms(150);
+    /* Too long: 130 bytes between the ENDs. */
+    uint8_t longy[132];
+    memset(longy, 0x11, sizeof longy);
+    longy[0] = longy[131] = 0xC0;
+    host_send_raw(longy, sizeof longy);
+    world_run_ms(150);
+    /* A broken escape. */
+    const uint8_t broken[] = {0xC0, 1, 0xDB, 7, 2, 0xC0};
+    host_send_raw(broken, sizeof broken);
+    world_run_ms(150);
+    host_collect();
+    CHECK(robot_state.errors.crc == 1 && robot_state.errors.framing == 3 && robot_state.errors.rejected == 0,
+          "crc %u framing %u rejected %u", robot_state.errors.crc, robot_state.errors.framing,
+          robot_state.errors.rejected);
+    const uint8_t codes[4] = {PB_ERROR_CODE_BAD_CRC, PB_ERROR_CODE_TOO_SHORT, PB_ERROR_CODE_TOO_LONG,
+                              PB_ERROR_CODE_FRAMING};
+    const uint16_t lengths[4] = {5, 2, 130, 3};
+    CHECK(host_count(PB_PKT_ERROR) == 4, "one answer each: %d", host_count(PB_PKT_ERROR));
+    for (int i = 0; i < 4; i++) {
+        const pb_error_t *e = error_packet(i);
+        CHECK(e && e->code == codes[i] && e->packet_type == 0 && e->seq == 0 && e->detail == lengths[i],
+              "answer %d: code %u type %u seq %u detail %u", i, e ? e->code : 0, e ? e->packet_type : 0,
+              e ? e->seq : 0, e ? e->detail : 0);
+    }
+    /* A burst of garbage: every frame counted, at most one answer per 100 ms. */
+    host_clear();
+    for (int k = 0; k < 50; k++) {
+        host_send_raw(slip, slip_encode(slip, frame, n));
+        world_run_ms(2);
+    }
+    world_run_ms(10);
+    host_collect();
+    CHECK(robot_state.errors.crc == 51, "counted %u", robot_state.errors.crc);
+    CHECK(host_count(PB_PKT_ERROR) >= 1 && host_count(PB_PKT_ERROR) <= 2, "answers in 110 ms: %d",
+          host_count(PB_PKT_ERROR));
 }
 
 static void settings_are_written_read_saved_and_reset_over_the_link(void)
@@ -207,9 +348,8 @@ static void garbage_on_the_link_never_hurts(void)
     }
     CHECK(robot_state.errors.rx_overflow > 0, "overflow counted");
     /* Still alive and answering. */
-    pb_hello_request_t r = {1};
     host_clear();
-    host_send(PB_PKT_HELLO_REQUEST, 0, &r, sizeof r);
+    hello_request(7);
     world_run_ms(5);
     host_collect();
     CHECK(host_count(PB_PKT_HELLO) == 1, "answers after the garbage");
@@ -221,7 +361,10 @@ void suite_comm(void)
     RUN(state_is_reflected_at_the_configured_mode_and_period);
     RUN(a_full_transmit_buffer_skips_and_counts);
     RUN(retransmitted_command_is_acked_but_not_executed_twice);
+    RUN(two_hosts_in_turn_get_every_command_executed);
+    RUN(acked_commands_need_a_sequence_number);
     RUN(bad_packets_are_counted_and_answered);
+    RUN(unreadable_frames_are_counted_and_reported_at_a_limited_rate);
     RUN(settings_are_written_read_saved_and_reset_over_the_link);
     RUN(garbage_on_the_link_never_hurts);
 }

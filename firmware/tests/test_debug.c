@@ -1,8 +1,8 @@
 #include <string.h>
 
+#include "core/data.h"
 #include "harness.h"
 #include "modules/debug.h"
-#include "modules/reflector.h"
 #include "world.h"
 
 static uint8_t fmt(char *out, uint8_t size, const char *f, ...)

@@ -2,11 +2,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/data.h"
 #include "drivers/line_sensor.h"
 #include "harness.h"
 #include "modules/line_follower.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 #include "world.h"
 
 static int16_t position_of(const uint16_t raw[8], uint8_t *seen)
@@ -36,6 +35,26 @@ static void position_does_not_depend_on_line_width(void)
     uint16_t none[8] = {100, 100, 100, 100, 100, 100, 100, 100};
     position_of(none, &seen);
     CHECK(!seen, "white: no line");
+}
+
+static void of_two_lines_the_one_nearest_to_the_last_position_counts(void)
+{
+    world_reset(1);
+    uint16_t fork[8] = {100, 2000, 2000, 100, 100, 100, 2000, 2000};
+    int16_t pos = -200;
+    uint8_t seen = 0;
+    for (int i = 0; i < 8; i++) { /* let a recalibration reach every spot */
+        pos = -200;
+        seen = line_sensor_evaluate(fork, NULL, &pos);
+    }
+    CHECK(seen && pos < -400, "the left one, near -200: %d", pos);
+    pos = 300;
+    seen = line_sensor_evaluate(fork, NULL, &pos);
+    CHECK(seen && pos > 700, "the right one, near 300: %d", pos);
+    /* One wide run is one line, whatever came before. */
+    uint16_t wide[8] = {100, 100, 2000, 2000, 2000, 2000, 100, 100};
+    pos = 900;
+    CHECK(line_sensor_evaluate(wide, NULL, &pos) && pos == 0, "a wide line is centred: %d", pos);
 }
 
 static void calibration_maps_each_spot_to_darkness(void)
@@ -72,7 +91,7 @@ static void acquisition_suppresses_ambient_light(void)
     world.ambient = 1500; /* a lamp comes on */
     world_run_ms(5);
     CHECK(robot_state.line.position == p1 && robot_state.line.raw[3] == r1, "ambient light has no effect");
-    CHECK(abs(p1) < 100 && (robot_state.line.flags & LINE_FLAG_SEEN), "centred line seen at %d", p1);
+    CHECK(abs(p1) < 100 && (robot_state.line.flags & PB_LINE_FLAG_SEEN), "centred line seen at %d", p1);
     world.line_y = -0.003; /* the line moves to the robot's right */
     world_run_ms(5);
     CHECK(robot_state.line.position > 200, "line to the right at %d", robot_state.line.position);
@@ -83,12 +102,12 @@ static void line_lost_after_timeout(void)
     world_reset(1);
     world.line_enabled = 0;
     world_run_ms(settings.line_follow.lost_timeout_ms - 20);
-    CHECK(!(robot_state.line.flags & LINE_FLAG_LOST), "not lost yet");
+    CHECK(!(robot_state.line.flags & PB_LINE_FLAG_LOST), "not lost yet");
     world_run_ms(40);
-    CHECK(robot_state.line.flags == LINE_FLAG_LOST, "lost: flags %x", robot_state.line.flags);
+    CHECK(robot_state.line.flags == PB_LINE_FLAG_LOST, "lost: flags %x", robot_state.line.flags);
     world.line_enabled = 1;
     world_run_ms(5);
-    CHECK(robot_state.line.flags == LINE_FLAG_SEEN, "found again: flags %x", robot_state.line.flags);
+    CHECK(robot_state.line.flags == PB_LINE_FLAG_SEEN, "found again: flags %x", robot_state.line.flags);
 }
 
 static void follower_converges_onto_the_line(void)
@@ -152,6 +171,7 @@ static void lost_line_stops_and_link_loss_respects_autonomy(void)
 void suite_line(void)
 {
     RUN(position_does_not_depend_on_line_width);
+    RUN(of_two_lines_the_one_nearest_to_the_last_position_counts);
     RUN(calibration_maps_each_spot_to_darkness);
     RUN(acquisition_suppresses_ambient_light);
     RUN(line_lost_after_timeout);

@@ -1,8 +1,8 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "core/fixed.h"
 #include "harness.h"
-#include "modules/fixed.h"
 #include "modules/pid.h"
 
 #define Q(x) ((int32_t)((x) * 65536.0))

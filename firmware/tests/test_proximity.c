@@ -1,9 +1,8 @@
 #include <string.h>
 
+#include "core/data.h"
 #include "harness.h"
 #include "modules/proximity.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 #include "world.h"
 
 static void heard(int side, int sender, int led, int power, int len, uint32_t lo, uint32_t hi)

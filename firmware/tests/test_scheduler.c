@@ -1,8 +1,10 @@
-#include "harness.h"
+#define _GNU_SOURCE
+#include <string.h>
+
+#include "core/data.h"
+#include "core/scheduler.h"
 #include "hal/hal.h"
-#include "modules/reflector.h"
-#include "modules/scheduler.h"
-#include "modules/settings.h"
+#include "harness.h"
 #include "world.h"
 
 static int fired;
@@ -56,11 +58,61 @@ static void channels_fire_once_at_their_time_even_after_long_delays(void)
 static void tick_health_is_reported_and_reset_with_each_state_packet(void)
 {
     world_reset(1);
-    robot_state.time.tick_max_us = 777;
-    world_run_ms(settings.sync.period_ms + 2);
-    /* In the emulator code takes no time, so a sent state packet resets the maximum to 0. */
-    CHECK(robot_state.time.tick_max_us == 0, "tick_max_us %u", robot_state.time.tick_max_us);
-    CHECK(robot_state.time.overruns == 0, "overruns %u", robot_state.time.overruns);
+    world_run_ms(150);
+    host_collect();
+    host_clear();
+    CHECK(robot_state.time.tick_max_us == 0, "code takes no time here: %u", robot_state.time.tick_max_us);
+    sim_host_stretch_tick_us(300);
+    world_run_ms(1);
+    CHECK(robot_state.time.tick_max_us == 300 && robot_state.time.overruns == 0, "a 300 us tick: max %u, overruns %u",
+          robot_state.time.tick_max_us, robot_state.time.overruns);
+    world_run_ms(settings.sync.period_ms + 10);
+    host_collect();
+    const host_frame_t *f = host_find(PB_PKT_STATE_FULL, 0);
+    pb_robot_state_t s;
+    if (f)
+        memcpy(&s, f->payload, sizeof s);
+    CHECK(f && s.time.tick_max_us == 300, "the next state packet tells it: %u", f ? s.time.tick_max_us : 0);
+    CHECK(robot_state.time.tick_max_us == 0, "and the maximum starts again: %u", robot_state.time.tick_max_us);
+}
+
+static int overrun_warnings(void)
+{
+    host_collect();
+    int n = 0;
+    for (int i = 0; i < host_count(PB_PKT_DEBUG_TEXT); i++) {
+        const host_frame_t *f = host_find(PB_PKT_DEBUG_TEXT, i);
+        n += f->payload[0] == PB_DEBUG_MODULE_SCHEDULER && f->payload[1] == 1;
+    }
+    return n;
+}
+
+static void an_overrun_is_counted_dated_and_reported_at_most_once_a_second(void)
+{
+    world_reset(1);
+    world_run_ms(500);
+    host_collect();
+    host_clear();
+    sim_host_stretch_tick_us(1500); /* one and a half periods: the next tick came due while it ran */
+    world_run_ms(3);
+    uint32_t when = robot_state.time.time_ms;
+    CHECK(robot_state.time.overruns == 1, "overruns %u", robot_state.time.overruns);
+    CHECK(robot_state.time.last_overrun_ms >= when - 3 && robot_state.time.last_overrun_ms <= when, "dated %u (now %u)",
+          robot_state.time.last_overrun_ms, when);
+    world_run_ms(5);
+    CHECK(overrun_warnings() == 1, "warned once: %d", overrun_warnings());
+    const host_frame_t *f = host_find(PB_PKT_DEBUG_TEXT, 0);
+    CHECK(f && f->len > 2 && memmem(f->payload + 2, f->len - 2u, "overran 1 times", 15) != NULL,
+          "the warning says how often");
+    /* More within the second: counted, no more warnings yet; then one warning for all of them. */
+    for (int k = 0; k < 3; k++) {
+        sim_host_stretch_tick_us(2500);
+        world_run_ms(100);
+    }
+    CHECK(robot_state.time.overruns >= 4, "overruns %u", robot_state.time.overruns);
+    CHECK(overrun_warnings() == 1, "still one warning: %d", overrun_warnings());
+    world_run_ms(1000);
+    CHECK(overrun_warnings() == 2, "the next second warns again: %d", overrun_warnings());
 }
 
 void suite_scheduler(void)
@@ -68,4 +120,5 @@ void suite_scheduler(void)
     RUN(main_loop_runs_at_the_configured_period);
     RUN(channels_fire_once_at_their_time_even_after_long_delays);
     RUN(tick_health_is_reported_and_reset_with_each_state_packet);
+    RUN(an_overrun_is_counted_dated_and_reported_at_most_once_a_second);
 }

@@ -1,6 +1,6 @@
+#include "core/data.h"
 #include "drivers/sensors.h"
 #include "harness.h"
-#include "modules/reflector.h"
 #include "world.h"
 
 static void colours_are_classified(void)

@@ -1,9 +1,9 @@
 #include <math.h>
 #include <string.h>
 
+#include "drivers/eeprom.h"
 #include "harness.h"
 #include "modules/settings.h"
-#include "drivers/eeprom.h"
 #include "world.h"
 
 static pb_settings_t before;

@@ -1,11 +1,10 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "core/data.h"
 #include "drivers/encoder.h"
-#include "harness.h"
 #include "hal/hal.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
+#include "harness.h"
 #include "modules/speed.h"
 #include "world.h"
 

@@ -37,6 +37,7 @@ void world_reset(int32_t robot_id)
 {
     memset(&world, 0, sizeof world);
     world.max_speed = 0.5;
+    world.gain[0] = world.gain[1] = 1.0;
     world.tau = 0.02;
     world.deadband = 30;
     world.stripe_ratio = 1.15;
@@ -75,7 +76,7 @@ static void step(double dt)
     int duty[2] = {o->pwm_left, o->pwm_right};
     int64_t t0 = world.now;
     for (int w = 0; w < 2; w++) {
-        double goal = abs(duty[w]) < world.deadband ? 0.0 : world.max_speed * duty[w] / 1000.0;
+        double goal = abs(duty[w]) < world.deadband ? 0.0 : world.max_speed * world.gain[w] * duty[w] / 1000.0;
         world.v[w] += (goal - world.v[w]) * (dt / world.tau);
         double old = world.pos[w];
         world.pos[w] += world.v[w] * dt;

@@ -25,6 +25,7 @@ typedef struct {
     int edge_index[2];
     double x, y, theta;   /* pose: metres, radians (theta 0 = +x, CCW positive) */
     double max_speed;     /* wheel speed at full duty, m/s */
+    double gain[2];       /* per-wheel motor strength (1.0: as max_speed says): a disturbance */
     double tau;           /* motor time constant, s */
     int deadband;         /* duties below this do not move the wheel */
     double stripe_ratio;  /* long stripe / mean stripe */
@@ -48,6 +49,8 @@ extern world_t world;
 const sim_outputs_t *sim_host_outputs(void);
 const uint8_t *sim_host_tx_buffer(void);
 void sim_host_eeprom_erase(void);
+/* The next main loop tick lasts `us` longer than its code (which takes no simulated time). */
+void sim_host_stretch_tick_us(uint32_t us);
 
 /** Resets the world (robot at the origin facing +x, standing still, EEPROM erased) and starts the firmware. */
 void world_reset(int32_t robot_id);

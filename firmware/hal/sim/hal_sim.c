@@ -5,16 +5,19 @@
  *
  * Time: MCU ticks at 32 MHz (int64). hal_micros() = ticks / 32, capture timestamps = ticks / 8 (4 MHz).
  * sim_advance() fires due compare interrupts in time order, each at its own time, and after each one runs
- * the main loop until it has nothing to do (as the MCU would between interrupts); code takes no time.
+ * the main loop until it has nothing to do (as the MCU would between interrupts); code takes no time, unless
+ * a host test stretches a tick (sim_host_stretch_tick_us()).
+ *
+ * The EEPROM is a plain array in linear memory (sim_eeprom()), erased (0xFF) in a fresh instance and kept by
+ * sim_init: the emulator power-cycles a robot by copying it into a fresh instance before sim_init.
  */
 #include <stddef.h>
 #include <string.h>
 
 #include "app.h"
+#include "core/data.h"
 #include "hal/hal.h"
 #include "hal/sim/sim_abi.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 
 #define TICKS_PER_US 32
 #define TICKS_PER_CAPTURE 8
@@ -25,8 +28,8 @@ static uint8_t armed[HAL_SCHED_CHANNELS];
 static uint8_t board_id;
 static sim_outputs_t outputs;
 static uint16_t line_result[HAL_LINE_DETECTORS];
-static uint8_t eeprom[HAL_EEPROM_SIZE];
-static uint8_t eeprom_ready;
+static uint8_t eeprom[HAL_EEPROM_SIZE] = {[0 ... HAL_EEPROM_SIZE - 1] = 0xFF};
+static int64_t stretch_ticks; /* how much longer than its code the next main loop tick lasts */
 static uint8_t tx_out[256];
 static uint8_t irq_enabled;
 
@@ -183,33 +186,52 @@ static void run_main_loop(void)
 void sim_init(int32_t robot_id)
 {
     now_ticks = 0;
+    stretch_ticks = 0;
     board_id = (robot_id > 0 && robot_id < 255) ? (uint8_t)robot_id : 0;
-    if (!eeprom_ready) { /* erased once; a later sim_init is a reset that keeps it, as on the robot */
-        memset(eeprom, 0xFF, sizeof eeprom);
-        eeprom_ready = 1;
-    }
-    app_init();
+    app_init(); /* the EEPROM keeps what it had, as on the robot */
+}
+
+/* Fires the earliest compare interrupt due by `target`, at its own time. \return false when none is due. */
+static bool fire_next(int64_t target)
+{
+    int8_t next = -1;
+    for (uint8_t ch = 0; ch < HAL_SCHED_CHANNELS; ch++)
+        if (armed[ch] && deadline[ch] <= target && (next < 0 || deadline[ch] < deadline[next]))
+            next = (int8_t)ch;
+    if (next < 0)
+        return false;
+    if (deadline[next] > now_ticks)
+        now_ticks = deadline[next];
+    armed[next] = 0;
+    if (irq_enabled)
+        scheduler_isr((uint8_t)next);
+    return true;
 }
 
 void sim_advance(int64_t target)
 {
-    for (;;) {
-        int8_t next = -1;
-        for (uint8_t ch = 0; ch < HAL_SCHED_CHANNELS; ch++)
-            if (armed[ch] && deadline[ch] <= target && (next < 0 || deadline[ch] < deadline[next]))
-                next = (int8_t)ch;
-        if (next < 0)
-            break;
-        if (deadline[next] > now_ticks)
-            now_ticks = deadline[next];
-        armed[next] = 0;
-        if (irq_enabled)
-            scheduler_isr((uint8_t)next);
+    while (fire_next(target))
         run_main_loop();
-    }
     if (target > now_ticks)
         now_ticks = target;
     run_main_loop();
+}
+
+/* A stretched tick: time passes inside it, and the interrupts due meanwhile fire while it still runs. */
+void hal_tick_done(void)
+{
+    if (stretch_ticks == 0)
+        return;
+    int64_t end = now_ticks + stretch_ticks;
+    stretch_ticks = 0;
+    while (fire_next(end)) {
+    }
+    now_ticks = end;
+}
+
+int32_t sim_eeprom(void)
+{
+    return (int32_t)(uintptr_t)eeprom;
 }
 
 void sim_encoder_edge(int32_t wheel, int64_t ticks)
@@ -223,6 +245,29 @@ void sim_uart_rx(int32_t byte)
 {
     if (irq_enabled)
         uart_rx_isr((uint8_t)byte);
+}
+
+static sim_event_t events[SIM_EVENT_CAPACITY];
+
+int32_t sim_events(void)
+{
+    return (int32_t)(uintptr_t)events;
+}
+
+void sim_run_events(int32_t count, int64_t end_ticks)
+{
+    if (count > SIM_EVENT_CAPACITY)
+        count = SIM_EVENT_CAPACITY;
+    for (int32_t i = 0; i < count; i++) {
+        const sim_event_t *e = &events[i];
+        sim_advance(e->ticks);
+        if (e->kind == SIM_EVENT_UART_RX)
+            sim_uart_rx(e->arg);
+        else if (e->kind == SIM_EVENT_ENCODER_EDGE)
+            sim_encoder_edge(e->arg, e->ticks);
+    }
+    if (end_ticks >= 0)
+        sim_advance(end_ticks);
 }
 
 int32_t sim_uart_tx_take(int32_t max)
@@ -289,6 +334,10 @@ const uint8_t *sim_host_tx_buffer(void)
 void sim_host_eeprom_erase(void)
 {
     memset(eeprom, 0xFF, sizeof eeprom);
-    eeprom_ready = 1;
+}
+
+void sim_host_stretch_tick_us(uint32_t us)
+{
+    stretch_ticks = (int64_t)us * TICKS_PER_US;
 }
 #endif

@@ -32,6 +32,26 @@ SIM_EXPORT(sim_encoder_edge) void sim_encoder_edge(int32_t wheel, int64_t ticks)
 /** A byte received from the host link (USART RX complete interrupt). */
 SIM_EXPORT(sim_uart_rx) void sim_uart_rx(int32_t byte);
 
+/** An event the emulator hands over in a batch (sim_run_events), in time order. */
+typedef struct __attribute__((packed)) {
+    int64_t ticks; /**< when it happens */
+    int32_t kind;  /**< SIM_EVENT_UART_RX or SIM_EVENT_ENCODER_EDGE */
+    int32_t arg;   /**< the byte received, or the wheel (0 left, 1 right) */
+} sim_event_t;
+
+#define SIM_EVENT_UART_RX 0
+#define SIM_EVENT_ENCODER_EDGE 1
+#define SIM_EVENT_CAPACITY 64
+
+/** Address of the event buffer (SIM_EVENT_CAPACITY sim_event_t) that sim_run_events reads. */
+SIM_EXPORT(sim_events) int32_t sim_events(void);
+
+/** Delivers the first `count` events of the buffer in order, exactly as the single calls would: for each,
+ *  sim_advance(ticks), then sim_uart_rx(arg) or sim_encoder_edge(arg, ticks); then, unless `end_ticks` is
+ *  negative, sim_advance(end_ticks). One call per emulator step instead of one per event: crossing into the
+ *  WebAssembly instance is the costly part of a small event. */
+SIM_EXPORT(sim_run_events) void sim_run_events(int32_t count, int64_t end_ticks);
+
 /** Takes up to `max` bytes the firmware has queued for the host link into the buffer at
  *  sim_uart_tx_buffer(); returns how many. The emulator calls it at the link's baud rate. */
 SIM_EXPORT(sim_uart_tx_take) int32_t sim_uart_tx_take(int32_t max);
@@ -47,6 +67,11 @@ SIM_EXPORT(sim_ir_rx) void sim_ir_rx(int32_t side, int32_t sender_id, int32_t se
 SIM_EXPORT(sim_outputs) int32_t sim_outputs(void);
 SIM_EXPORT(sim_state) int32_t sim_state(void);
 SIM_EXPORT(sim_settings) int32_t sim_settings(void);
+
+/** Address of the EEPROM (HAL_EEPROM_SIZE = 2048 bytes) in linear memory: erased (0xFF) in a fresh instance,
+ *  kept by sim_init. The emulator power-cycles a robot by copying it into a fresh instance before sim_init,
+ *  so saved settings survive the reset as on the robot. */
+SIM_EXPORT(sim_eeprom) int32_t sim_eeprom(void);
 
 /** What the firmware drives, little-endian in linear memory at sim_outputs(). */
 typedef struct __attribute__((packed)) {

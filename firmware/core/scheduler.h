@@ -2,7 +2,8 @@
  * \file scheduler.h
  * Four-channel scheduler on one timer (thesis 11.1): one event per channel at a time, callbacks run in
  * interrupt context and must only start short actions. Channel 0 times the main loop at
- * settings.scheduler.main_period_us; the others belong to drivers.
+ * settings.scheduler.main_period_us; the others belong to drivers. On the ground floor (core/): drivers
+ * and modules use it, it uses only the HAL and the global data.
  */
 #ifndef SCHEDULER_H
 #define SCHEDULER_H
@@ -34,8 +35,17 @@ void scheduler_cancel(uint8_t ch);
 /** \return true (once per tick) when a main loop tick is due; call scheduler_tick_end() when done. */
 bool scheduler_tick_begin(void);
 
-/** Ends a tick: measures its duration into robot_state.time.tick_max_us and counts overruns. */
+/** Ends a tick: measures its duration into robot_state.time.tick_max_us and counts overruns (a tick that
+ *  took longer than the period, or a tick that came due while the previous one still ran) in
+ *  robot_state.time.overruns and .last_overrun_ms. */
 void scheduler_tick_end(void);
+
+/** \return true when overruns happened that scheduler_take_overruns() has not taken yet. */
+bool scheduler_overruns_pending(void);
+
+/** Takes the overruns since the last call, for a warning. \param longest_us set to the longest tick among
+ *  them (us) \return how many ticks overran */
+uint16_t scheduler_take_overruns(uint16_t *longest_us);
 
 /** Period of the main loop in microseconds (settings.scheduler.main_period_us, clamped). */
 uint16_t scheduler_period_us(void);

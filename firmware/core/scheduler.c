@@ -1,8 +1,7 @@
 #include "scheduler.h"
 
+#include "core/data.h"
 #include "hal/hal.h"
-#include "modules/reflector.h"
-#include "modules/settings.h"
 
 typedef struct {
     scheduler_cb_t cb;
@@ -15,6 +14,9 @@ static channel_t channels[HAL_SCHED_CHANNELS];
 static volatile uint8_t ticks_pending;
 static volatile uint8_t late_ticks;
 static uint32_t tick_start;
+/* Overruns not yet taken by scheduler_take_overruns(). */
+static uint16_t unreported;
+static uint16_t unreported_longest_us;
 
 static void arm(uint8_t ch)
 {
@@ -50,6 +52,8 @@ void scheduler_init(void)
     }
     ticks_pending = 0;
     late_ticks = 0;
+    unreported = 0;
+    unreported_longest_us = 0;
     channels[SCHED_CH_MAIN].fired = hal_micros();
     scheduler_again(SCHED_CH_MAIN, scheduler_period_us(), main_tick);
 }
@@ -121,9 +125,30 @@ void scheduler_tick_end(void)
     hal_irq_restore(s);
     if (took > scheduler_period_us())
         late = late ? late : 1;
-    robot_state.time.overruns = (uint16_t)(robot_state.time.overruns + late);
     if (took > 0xFFFFu)
         took = 0xFFFFu;
+    if (late) {
+        robot_state.time.overruns = (uint16_t)(robot_state.time.overruns + late);
+        /* 0 means "never": an overrun in the very first millisecond is dated 1 ms. */
+        robot_state.time.last_overrun_ms = robot_state.time.time_ms ? robot_state.time.time_ms : 1u;
+        unreported = (uint16_t)(unreported + late);
+        if (took > unreported_longest_us)
+            unreported_longest_us = (uint16_t)took;
+    }
     if (took > robot_state.time.tick_max_us)
         robot_state.time.tick_max_us = (uint16_t)took;
+}
+
+bool scheduler_overruns_pending(void)
+{
+    return unreported != 0;
+}
+
+uint16_t scheduler_take_overruns(uint16_t *longest_us)
+{
+    uint16_t n = unreported;
+    *longest_us = unreported_longest_us;
+    unreported = 0;
+    unreported_longest_us = 0;
+    return n;
 }
