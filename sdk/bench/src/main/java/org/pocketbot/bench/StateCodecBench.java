@@ -17,9 +17,14 @@ import org.openjdk.jmh.annotations.Setup;
 import org.openjdk.jmh.annotations.State;
 import org.openjdk.jmh.annotations.Warmup;
 import org.openjdk.jmh.infra.Blackhole;
+import org.pocketbot.protocol.Colour;
 import org.pocketbot.protocol.Crc16;
+import org.pocketbot.protocol.DistanceClass;
 import org.pocketbot.protocol.FrameResult;
 import org.pocketbot.protocol.Frames;
+import org.pocketbot.protocol.IrLed;
+import org.pocketbot.protocol.LineFollowStatus;
+import org.pocketbot.protocol.LocoMode;
 import org.pocketbot.protocol.Packet;
 import org.pocketbot.protocol.ProximitySide;
 import org.pocketbot.protocol.RobotState;
@@ -35,17 +40,19 @@ import org.pocketbot.protocol.StateLocomotion;
 import org.pocketbot.protocol.StatePower;
 import org.pocketbot.protocol.StateProximity;
 import org.pocketbot.protocol.StateTime;
+import org.pocketbot.protocol.StateTrack;
 import org.pocketbot.protocol.StateWheels;
+import org.pocketbot.protocol.TrackStatus;
 
 /**
- * A full state packet (88-byte robot_state in a 93-byte frame), at two levels, against Javolution 5.5.1's Struct
+ * A full state packet (97-byte robot_state in a 102-byte frame), at two levels, against Javolution 5.5.1's Struct
  * reading every field of the same payload bytes - as the thesis's library did it (a new Struct per packet,
  * Listing 9.4), and, kinder to Javolution, with one Struct reused for every packet.
  * <ul>
- * <li>payload: the SDK decodes the 88 payload bytes into immutable objects ({@code Frames.decodePayload}) and
- *     encodes them back into a new 88-byte array ({@code encodePayload}); Javolution reads the same 88 bytes
- *     (decode only, as the thesis did; and decode + encode, writing every field into a new 88-byte Struct).</li>
- * <li>frame: the SDK checks the CRC and decodes the 93-byte frame, then encodes a new frame with its CRC;
+ * <li>payload: the SDK decodes the 97 payload bytes into immutable objects ({@code Frames.decodePayload}) and
+ *     encodes them back into a new 97-byte array ({@code encodePayload}); Javolution reads the same 97 bytes
+ *     (decode only, as the thesis did; and decode + encode, writing every field into a new 97-byte Struct).</li>
+ * <li>frame: the SDK checks the CRC and decodes the 102-byte frame, then encodes a new frame with its CRC;
  *     Javolution gets the same CRC check (the SDK's Crc16) before it reads the payload.</li>
  * </ul>
  * Every benchmark returns its result to JMH, so nothing is dead code.
@@ -66,11 +73,14 @@ public class StateCodecBench {
     @Setup
     public void setup() {
         RobotState s = new RobotState(
-            new StateTime(123456L, 870, 2), new StateEncoders(-1234, 5678), new StateWheels(180, 175, 520, 515),
-            new StateLine(Arrays.asList(100, 220, 900, 1800, 1750, 300, 120, 90), -120, 1), new StateLineFollow(1, 2),
-            new StateProximity(new ProximitySide(2, 3, 2, 1), new ProximitySide(0, 0, 0, 0)),
-            new StateColour(20, 22, 25, 70, 2), new StateAccel(12, -8, 1003), new StatePower(3870, 140, 312),
-            new StateIndicators(1, 100), new StateLocomotion(1, 3, 17, 16), new StateErrors(0, 1, 0, 0, 0));
+            new StateTime(123456L, 870, 2, 0L), new StateEncoders(-1234, 5678), new StateWheels(180, 175, 520, 515),
+            new StateLine(Arrays.asList(100, 220, 900, 1800, 1750, 300, 120, 90), -120, 1),
+            new StateLineFollow(LineFollowStatus.FOLLOWING, Colour.BLACK),
+            new StateProximity(new ProximitySide(2, 3, IrLed.REAR, DistanceClass.FAR),
+                new ProximitySide(0, 0, IrLed.FRONT, DistanceClass.NONE)),
+            new StateColour(20, 22, 25, 70, Colour.BLACK), new StateAccel(12, -8, 1003), new StatePower(3870, 140, 312),
+            new StateIndicators(1, 100), new StateLocomotion(LocoMode.MOVEMENT, 3, 17, 16),
+            new StateTrack(TrackStatus.FOLLOWING, 1, 4, 2), new StateErrors(0, 1, 0, 0, 0));
         frame = Frames.INSTANCE.encode(new StateFull(s), 42);
         payload = Arrays.copyOfRange(frame, Frames.HEADER_SIZE, frame.length - Frames.CRC_SIZE);
         packet = Frames.INSTANCE.decodePayload(StateFull.TYPE, payload, 0, payload.length);
@@ -113,13 +123,13 @@ public class StateCodecBench {
         return reused.readAll();
     }
 
-    /** Like for like with sdkPayloadDecodeEncode: a new Struct reads every field, a second one writes them all into 88 new bytes. */
+    /** Like for like with sdkPayloadDecodeEncode: a new Struct reads every field, a second one writes them all into new bytes. */
     @Benchmark
     public byte[] javolutionDecodeEncode() {
         JavolutionState in = new JavolutionState();
         in.setByteBuffer(ByteBuffer.wrap(payload).order(ByteOrder.LITTLE_ENDIAN), 0);
         JavolutionState out = new JavolutionState();
-        ByteBuffer bytes = ByteBuffer.allocate(88).order(ByteOrder.LITTLE_ENDIAN);
+        ByteBuffer bytes = ByteBuffer.allocate(payload.length).order(ByteOrder.LITTLE_ENDIAN);
         out.setByteBuffer(bytes, 0);
         out.copyFrom(in);
         return bytes.array();
@@ -168,6 +178,7 @@ public class StateCodecBench {
         final Unsigned32 timeMs = new Unsigned32();
         final Unsigned16 tickMaxUs = new Unsigned16();
         final Unsigned16 overruns = new Unsigned16();
+        final Unsigned32 lastOverrunMs = new Unsigned32();
         final Signed32 encLeft = new Signed32();
         final Signed32 encRight = new Signed32();
         final Signed16 speedLeft = new Signed16();
@@ -193,10 +204,15 @@ public class StateCodecBench {
         final Unsigned8 queueLength = new Unsigned8();
         final Unsigned16 currentId = new Unsigned16();
         final Unsigned16 finishedId = new Unsigned16();
+        final Unsigned8 trackStatus = new Unsigned8();
+        final Unsigned8 token = new Unsigned8();
+        final Unsigned16 tokenVisits = new Unsigned16();
+        final Unsigned8 metId = new Unsigned8();
         final Unsigned16[] errors = array(new Unsigned16[5]);
 
         void copyFrom(JavolutionState s) {
             timeMs.set(s.timeMs.get()); tickMaxUs.set(s.tickMaxUs.get()); overruns.set(s.overruns.get());
+            lastOverrunMs.set(s.lastOverrunMs.get());
             encLeft.set(s.encLeft.get()); encRight.set(s.encRight.get());
             speedLeft.set(s.speedLeft.get()); speedRight.set(s.speedRight.get()); pwmLeft.set(s.pwmLeft.get()); pwmRight.set(s.pwmRight.get());
             for (int i = 0; i < raw.length; i++) raw[i].set(s.raw[i].get());
@@ -208,18 +224,20 @@ public class StateCodecBench {
             batteryMv.set(s.batteryMv.get()); currentMa.set(s.currentMa.get()); mcuTemp.set(s.mcuTemp.get());
             led.set(s.led.get()); irPower.set(s.irPower.get()); locoMode.set(s.locoMode.get()); queueLength.set(s.queueLength.get());
             currentId.set(s.currentId.get()); finishedId.set(s.finishedId.get());
+            trackStatus.set(s.trackStatus.get()); token.set(s.token.get()); tokenVisits.set(s.tokenVisits.get()); metId.set(s.metId.get());
             for (int i = 0; i < errors.length; i++) errors[i].set(s.errors[i].get());
         }
 
         long readAll() {
-            long sum = timeMs.get() + tickMaxUs.get() + overruns.get() + encLeft.get() + encRight.get()
+            long sum = timeMs.get() + tickMaxUs.get() + overruns.get() + lastOverrunMs.get() + encLeft.get() + encRight.get()
                 + speedLeft.get() + speedRight.get() + pwmLeft.get() + pwmRight.get();
             for (Unsigned16 r : raw) sum += r.get();
             sum += position.get() + lineFlags.get() + followStatus.get() + followSegment.get();
             for (Unsigned8 p : proximity) sum += p.get();
             for (Unsigned8 c : colour) sum += c.get();
             sum += ax.get() + ay.get() + az.get() + batteryMv.get() + currentMa.get() + mcuTemp.get() + led.get()
-                + irPower.get() + locoMode.get() + queueLength.get() + currentId.get() + finishedId.get();
+                + irPower.get() + locoMode.get() + queueLength.get() + currentId.get() + finishedId.get()
+            + trackStatus.get() + token.get() + tokenVisits.get() + metId.get();
             for (Unsigned16 e : errors) sum += e.get();
             return sum;
         }

@@ -29,11 +29,48 @@ import kotlin.time.Duration.Companion.milliseconds
  *   java -cp sdk/bench/target/classes:$(cat sdk/bench/target/classpath.txt) org.pocketbot.bench.SdkBenchKt [codec] [realtime] [connect]
  */
 fun main(args: Array<String>) {
-    val which = args.toSet().ifEmpty { setOf("codec", "realtime", "connect") }
+    val which = args.toSet().ifEmpty { setOf("codec", "realtime", "connect", "fleet") }
     if ("codec" in which) codec()
     if ("connect" in which) connect()
     if ("realtime" in which) realtime()
+    if ("fleet" in which) fleet()
+    // One fleet run, for profiling: fleet-tcp-<n> or fleet-inprocess-<n>.
+    which.firstOrNull { it.startsWith("fleet-") }?.let { arg ->
+        val (_, kind, n) = arg.split('-')
+        val r = FleetBench.run(n.toInt(), tcp = kind == "tcp", seconds = 10)
+        line("fleet_run", "${r.transport} n=${r.n} cores=${"%.2f".format(r.cores)} us_per_update=${"%.2f".format(r.usPerUpdate)} p99_ms=${"%.2f".format(r.p99Ms)}")
+    }
 }
+
+/**
+ * Fleet scale (FleetBench): N robots at 100 Hz full state each, over TCP and in process. The largest N whose SDK
+ * work fits in one core (process CPU without the stand-in robots' threads <= 1 core) with p99 latency <= 5 ms.
+ */
+private fun fleet() {
+    val sizes = listOf(100, 250, 500, 1000, 1500, 2000)
+    for (tcp in listOf(true, false)) {
+        var fits = 0
+        var at1000: FleetBench.Result? = null
+        for (n in sizes) {
+            val r = FleetBench.run(n, tcp, seconds = 5)
+            report(r)
+            if (n == 1000) at1000 = r
+            if (r.cores <= 1.0 && r.p99Ms <= 5.0) fits = n else break
+        }
+        // The cost and the tail at 1000 robots are printed whether or not a smaller fleet already missed the goal.
+        val r1000 = at1000 ?: FleetBench.run(1000, tcp, seconds = 5).also(::report)
+        val suffix = if (tcp) "" else "_in_process"
+        line("fleet_robots_per_core$suffix", fits.toString())
+        line("fleet_us_per_update$suffix", "%.2f".format(r1000.usPerUpdate))
+        line("fleet_p99_ms$suffix", "%.2f".format(r1000.p99Ms))
+        line("fleet_timed_share$suffix", "%.1f%%".format(100.0 * r1000.timed / r1000.updates.coerceAtLeast(1)))
+    }
+}
+
+private fun report(r: FleetBench.Result) = System.err.println(
+    "  fleet ${r.transport} robots=${r.n} cores=${"%.2f".format(r.cores)} us_per_update=${"%.2f".format(r.usPerUpdate)} " +
+        "p99_ms=${"%.2f".format(r.p99Ms)} updates=${r.updates} timed=${r.timed} late=${r.late}",
+)
 
 private fun line(metric: String, value: String) = println("sdk $metric=$value")
 
@@ -104,13 +141,16 @@ private fun connect() {
     val times = (1..3).map {
         Emulator.local(robots = 7).use { emu ->
             emu.start(Speed.Realtime(1.0))
-            runBlocking { delay(100) } // let the firmware boot
-            val fleet = Fleet(options = RobotOptions(settingsCache = InMemorySettingsCache()))
-            val devices = runBlocking { emu.discoverer().discover().toList() }
-            val t0 = System.nanoTime()
-            runBlocking { fleet.connectAll(devices) }
-            val ms = (System.nanoTime() - t0) / 1e6
-            fleet.close()
+            val ms = runBlocking {
+                delay(100) // let the firmware boot
+                val fleet = Fleet(this, RobotOptions(settingsCache = InMemorySettingsCache()))
+                val devices = emu.discoverer().discover().toList()
+                val t0 = System.nanoTime()
+                fleet.connectAll(devices)
+                val ms = (System.nanoTime() - t0) / 1e6
+                fleet.disconnect()
+                ms
+            }
             emu.stop()
             ms
         }
@@ -123,14 +163,17 @@ private fun connect() {
  * Seven robots in real time, each on its own simulated 115200-baud link (reached over TCP): six in full mode at
  * 100 Hz, one in reduced mode at a 2 ms period (more than its link carries). Delivered state updates per second
  * are compared with what each link can carry at that frame size (10 bits per SLIP byte), and the host-side
- * latency from a state frame's last byte leaving the transport's SLIP decoder to the StateFlow emission is timed.
+ * latency from a state frame's last byte written to the SDK's socket (StampingProxy) through the SDK's TcpTransport
+ * (the SLIP stream transport over a socket: the same reader and decoder serial and Bluetooth links use)
+ * to the StateFlow emission is timed.
  */
 private fun realtime() {
     val baud = 115_200.0
     Emulator.local(robots = 7).use { emu ->
         emu.start(Speed.Realtime(1.0))
         emu.startTcp(basePort = 0)
-        val devices = emu.robots.map { BenchTcpDevice(it.name, it.tcpPort) }
+        val proxies = emu.robots.map { StampingProxy(it.tcpPort) }
+        val devices = emu.robots.mapIndexed { i, r -> org.pocketbot.sdk.transport.TcpRobotDevice("127.0.0.1", proxies[i].port, r.name) }
         val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
         val fleet = Fleet(scope, RobotOptions(settingsCache = InMemorySettingsCache()))
         val robots = runBlocking { fleet.connectAll(devices) }
@@ -142,7 +185,7 @@ private fun realtime() {
             }
         }
         robots.forEachIndexed { i, r ->
-            val arrivals = devices[i].arrivals
+            val arrivals = proxies[i].arrivals
             // Unconfined: the collector runs inside the emission, so its clock reading is the emission time.
             scope.launch(Dispatchers.Unconfined) {
                 r.stateUpdates.collect { u: StateUpdate ->
@@ -187,6 +230,7 @@ private fun realtime() {
         line("realtime_dropped_frames", after.sumOf { it.dropped }.toString())
         fleet.close()
         scope.cancel()
+        proxies.forEach { it.close() }
         emu.stop()
     }
 }

@@ -22,12 +22,17 @@ public enum class DebugSource {
  * @property module the firmware module for [DebugSource.ROBOT] messages, null for the SDK's own.
  * @property level 1 errors, 2 info, 3 verbose, 4 trace.
  */
-public data class DebugMessage(
+public class DebugMessage internal constructor(
     public val source: DebugSource,
     public val module: DebugModule?,
     public val level: Int,
     public val text: String,
 ) {
+    override fun equals(other: Any?): Boolean =
+        other is DebugMessage && source == other.source && module == other.module && level == other.level && text == other.text
+
+    override fun hashCode(): Int = listOf(source, module, level, text).hashCode()
+
     override fun toString(): String = "[${module?.name?.lowercase() ?: source.name.lowercase()}:$level] $text"
 }
 
@@ -41,7 +46,7 @@ public class DebugLog internal constructor() {
     public val messages: SharedFlow<DebugMessage> = _messages.asSharedFlow()
 
     internal fun robot(p: DebugText) {
-        _messages.tryEmit(DebugMessage(DebugSource.ROBOT, DebugModule.fromCode(p.module), p.level, p.text.decodeToString()))
+        _messages.tryEmit(DebugMessage(DebugSource.ROBOT, DebugModule.fromCode(p.module).takeIf { it != DebugModule.UNKNOWN }, p.level, p.text.decodeToString()))
     }
 
     internal fun host(level: Int, text: String) {

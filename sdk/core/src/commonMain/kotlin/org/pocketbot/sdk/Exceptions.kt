@@ -10,7 +10,7 @@ public open class RobotException(message: String, cause: Throwable? = null) : Ex
  * The robot's firmware and this SDK do not speak the same protocol; the message names both versions.
  * Update the firmware or the SDK so that both are generated from the same `protocol/pocketbot.toml`.
  */
-public class ProtocolMismatchException(
+public class ProtocolMismatchException internal constructor(
     /** Protocol version the robot announced. */
     public val robotVersion: Int,
     /** Layout hash the robot announced. */
@@ -27,44 +27,61 @@ public class ProtocolMismatchException(
 /**
  * The robot answered a command with an `error` packet: it was refused and not executed.
  *
- * @property packetType the refused packet's type (see [PACKET_SPECS]).
- * @property code what the robot objected to, or null for a code this SDK does not know ([rawCode]).
- * @property detail code-specific: the offending offset, length or value.
+ * @property command the refused command's name in the protocol, e.g. `move_straight`.
+ * @property code what the robot objected to.
+ * @property detail code-specific (docs/protocol.md): the offending settings offset, the byte offset of the bad
+ *   argument in the command, the length.
  */
-public open class CommandRefusedException(
-    public val packetType: Int,
-    public val rawCode: Int,
+public open class CommandRefusedException internal constructor(
+    public val command: String,
+    public val code: ErrorCode,
     public val detail: Int,
-    message: String = "robot refused ${PACKET_SPECS[packetType]?.name ?: "packet 0x${packetType.toString(16)}"}: " +
-        "${ErrorCode.fromCode(rawCode)?.name ?: "error $rawCode"} (detail $detail)",
+    message: String = "robot refused $command: ${code.name.lowercase()} (detail $detail)",
 ) : RobotException(message) {
-    public val code: ErrorCode? get() = ErrorCode.fromCode(rawCode)
+    internal constructor(packetType: Int, rawCode: Int, detail: Int) :
+        this(commandName(packetType), errorCodeOf(rawCode), detail)
 }
 
-/** The robot refused to write the setting at [path] to [value] (out of its min..max, or not a field boundary). */
-public class SettingRefusedException(
-    /** Dotted path of the setting, e.g. `line_pid.kp`. */
-    public val path: String,
+/** The robot refused to write the setting [name] to [value]: outside its min..max, or not a whole field. */
+public class SettingRefusedException internal constructor(
+    /** The setting's name, e.g. `line_pid.kp`. */
+    public val name: String,
     /** The value that was refused. */
     public val value: Any?,
-    packetType: Int,
-    rawCode: Int,
+    code: ErrorCode,
     detail: Int,
 ) : CommandRefusedException(
-    packetType, rawCode, detail,
-    "robot refused setting $path = $value: ${ErrorCode.fromCode(rawCode)?.name ?: "error $rawCode"} (detail $detail)",
+    "update_settings", code, detail,
+    "robot refused setting $name = $value: ${code.name.lowercase()}" +
+        if (code == ErrorCode.SETTINGS_VALUE) " (outside the range the robot accepts)" else " (detail $detail)",
 )
 
 /** A command was sent [attempts] times on a live link and never acknowledged. */
-public class CommandTimeoutException(
-    /** The command's packet type. */
-    public val packetType: Int,
+public class CommandTimeoutException internal constructor(
+    /** The command's name in the protocol. */
+    public val command: String,
     /** How often it was sent. */
     public val attempts: Int,
-) : RobotException("${PACKET_SPECS[packetType]?.name ?: "packet 0x${packetType.toString(16)}"} not acknowledged after $attempts attempts")
+) : RobotException("$command not acknowledged after $attempts attempts") {
+    internal constructor(packetType: Int, attempts: Int) : this(commandName(packetType), attempts)
+}
+
+/**
+ * Too many acknowledged commands of one robot wait for an answer at once ([window] of them): the newest is refused
+ * rather than queued without end. It happens only when the robot stops answering while commands keep coming; each
+ * waiting command ends by itself with its timeout.
+ */
+public class CommandWindowFullException internal constructor(
+    /** How many commands may wait for an answer at a time. */
+    public val window: Int,
+) : RobotException("$window commands already wait for the robot's answer; refusing another until some are answered")
 
 /** The robot was closed (by [Robot.close], or after the SDK gave up reconnecting) before the operation finished. */
-public class RobotClosedException(message: String, cause: Throwable? = null) : RobotException(message, cause)
+public class RobotClosedException internal constructor(message: String, cause: Throwable? = null) : RobotException(message, cause)
 
 /** The first link to a robot could not be established (no answer to `hello_request`, transport failed). */
-public class ConnectFailedException(message: String, cause: Throwable? = null) : RobotException(message, cause)
+public class ConnectFailedException internal constructor(message: String, cause: Throwable? = null) : RobotException(message, cause)
+
+internal fun commandName(packetType: Int): String = PACKET_SPECS[packetType]?.name ?: "packet 0x${packetType.toString(16)}"
+
+internal fun errorCodeOf(raw: Int): ErrorCode = ErrorCode.fromCode(raw)

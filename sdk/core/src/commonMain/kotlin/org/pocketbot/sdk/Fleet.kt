@@ -2,7 +2,6 @@ package org.pocketbot.sdk
 
 import kotlinx.coroutines.CompletableDeferred
 import kotlinx.coroutines.CoroutineScope
-import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.Job
 import kotlinx.coroutines.SupervisorJob
 import kotlinx.coroutines.async
@@ -26,17 +25,21 @@ import kotlin.time.Duration.Companion.seconds
  * them in parallel, start movements on several at the same moment (thesis A.2), close them all.
  *
  * ```
- * Fleet().use { fleet ->
- *     val (a, b) = fleet.discoverAndConnect(discoverer, count = 2)
- *     fleet.enqueueTogether(mapOf(a to Movement.Straight(0.05, 0.1), b to Movement.Straight(0.05, 0.1)))
- *     fleet.awaitIdle()
+ * runBlocking {
+ *     Fleet(this).use { fleet ->
+ *         val (a, b) = fleet.discoverAndConnect(discoverer, count = 2)
+ *         fleet.enqueueTogether(mapOf(a to Movement.Straight(0.05, 0.1), b to Movement.Straight(0.05, 0.1)))
+ *         fleet.awaitIdle()
+ *     }
  * }
  * ```
- * Closing the fleet (or cancelling [scope]'s job) closes every robot in it.
+ * The fleet is bound to [scope] as each [Robot] is: when the scope's job ends, the fleet closes every robot in it;
+ * [close] and [disconnect] do so earlier.
  */
-public class Fleet(scope: CoroutineScope? = null, private val options: RobotOptions = RobotOptions()) : AutoCloseable {
-    private val job = SupervisorJob(scope?.coroutineContext?.get(Job))
-    private val fleetScope = CoroutineScope((scope?.coroutineContext ?: Dispatchers.Default) + job)
+public class Fleet(scope: CoroutineScope, private val options: RobotOptions = RobotOptions()) : AutoCloseable {
+    private val job = SupervisorJob()
+    private val fleetScope = CoroutineScope(scope.coroutineContext.minusKey(Job) + job)
+    private val bound = scope.coroutineContext[Job]?.invokeOnCompletion { close() }
     private val _robots = MutableStateFlow<List<Robot>>(emptyList())
 
     /** The connected robots, in the order they joined. */
@@ -116,10 +119,19 @@ public class Fleet(scope: CoroutineScope? = null, private val options: RobotOpti
         _robots.update { it - robot }
     }
 
-    /** Closes every robot and the fleet's scope; idempotent. */
+    /** Closes every robot and suspends until all their coroutines ended; idempotent. */
+    public suspend fun disconnect() {
+        val all = _robots.value
+        _robots.value = emptyList()
+        for (r in all) r.disconnect()
+        close()
+    }
+
+    /** Closes every robot without waiting for their coroutines (for `use {}`); idempotent. */
     override fun close() {
         _robots.value.forEach { it.close() }
         _robots.value = emptyList()
         job.cancel()
+        bound?.dispose()
     }
 }

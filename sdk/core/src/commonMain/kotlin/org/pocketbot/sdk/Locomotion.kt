@@ -1,40 +1,67 @@
 package org.pocketbot.sdk
 
+import kotlinx.coroutines.CancellationException
 import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
 import org.pocketbot.protocol.LocoMode
+import org.pocketbot.protocol.MoveArc
+import org.pocketbot.protocol.MoveRotate
+import org.pocketbot.protocol.MoveStraight
+import org.pocketbot.protocol.MovementDone
+import org.pocketbot.protocol.MovementLog
+import org.pocketbot.protocol.MovementOutcome as WireOutcome
+import org.pocketbot.protocol.Packet
+import org.pocketbot.protocol.ReadMovements
 import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.Stop
 import org.pocketbot.protocol.WheelSpeeds
+import org.pocketbot.sdk.internal.EMPTY_STATE
+import org.pocketbot.sdk.internal.link.CommandWithdrawnException
+import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.random.Random
+import kotlin.time.Duration.Companion.milliseconds
 
 /**
- * A movement queued on the robot, identified by [id] (the movement id in `move_*`, `movement_done` and
- * state.locomotion).
+ * A movement queued on the robot. It always ends, with the truth: [await] returns how it ended and how much of it
+ * was done, as the robot reported it (see [MovementOutcome]).
  */
 public class MovementHandle internal constructor(
-    private val robot: Robot,
-    /** The movement id, 1..65535. */
+    private val link: LinkPort,
+    /** The movement id, 1..65535 (in `move_*`, `movement_done` and state.locomotion). */
     public val id: Int,
     /** What was queued. */
     public val movement: Movement,
 ) {
     internal val result = CompletableDeferred<MovementResult>()
 
-    /** True once the movement finished or was cancelled. */
+    /** The robot acknowledged it: it was in its queue. */
+    internal var acked = false
+
+    /** Withdrawn by a stop after it went out: the robot may or may not have it. */
+    internal var uncertain = false
+
+    /** The robot no longer held it at the last look: declared lost unless its log shows it at the next. */
+    internal var missing = false
+
+    /** True once it ended. */
     public val isDone: Boolean get() = result.isCompleted
 
+    /** How it ended, or null while it has not. */
+    @OptIn(kotlinx.coroutines.ExperimentalCoroutinesApi::class)
+    public val resultOrNull: MovementResult? get() = if (result.isCompleted) result.getCompleted() else null
+
     /**
-     * Suspends until the movement finished or was cancelled by [Locomotion.stop]. Survives link losses: after a
-     * reconnect the SDK checks state.locomotion.finished_id.
+     * Suspends until the movement ended and returns how. Survives link losses: after a reconnect the SDK reads the
+     * robot's movement log and ends every handle the robot no longer holds.
      *
      * @throws RobotClosedException when the robot is closed first.
      */
-    public suspend fun await(): MovementResult = robot.awaitOrClosed(result)
+    public suspend fun await(): MovementResult = link.awaitOrClosed(result)
 
-    override fun toString(): String = "MovementHandle(#$id $movement)"
+    override fun toString(): String = "MovementHandle(#$id $movement${resultOrNull?.let { ": $it" } ?: ""})"
 }
 
 /**
@@ -47,18 +74,34 @@ public class MovementHandle internal constructor(
  * }
  * robot.locomotion.awaitIdle()
  * ```
+ *
+ * **The link failsafe.** The robot stops host-driven motion on its own when it hears nothing from the host for
+ * settings.link.failsafe_timeout_ms (1000 ms by default; 0 turns it off): the running movement is cut where it is,
+ * the queue is cleared, teleoperation stops, and line following stops unless settings.line_follow.autonomous. While
+ * the link is up the SDK's heartbeat keeps the failsafe quiet, so it trips only when the link is down for longer
+ * than the timeout. Every movement it ends reports [MovementOutcome.FAILSAFE] with the distance or angle done, and
+ * [mode] says [LocoMode.FAILSAFE] until the next command. A shorter outage changes nothing: the movement goes on
+ * and finishes once. Change the timeout with `robot.settings.link.failsafeTimeoutMs.set(ms)`.
  */
-public class Locomotion internal constructor(private val robot: Robot) {
-    private val _state = MutableStateFlow(StateLocomotion(0, 0, 0, 0))
-    private val outstanding = ArrayDeque<MovementHandle>()
-    private var lastId = Random.nextInt(1, 0xFFFF)
-    private var lastFinishedSeen = -1
+public class Locomotion internal constructor(private val link: LinkPort, random: Random) {
+    private val _state = MutableStateFlow(EMPTY_STATE.locomotion)
+    private val _queue = MutableStateFlow<List<MovementHandle>>(emptyList())
+    private val outstanding = ArrayList<MovementHandle>()
+    private var lastId = random.nextInt(1, 0xFFFF)
+    private var stopGeneration = 0
+    private var logWaiter: CompletableDeferred<MovementLog>? = null
+    private var heldIds: Set<Int> = emptySet()
+    private var logCheck: kotlinx.coroutines.Job? = null
+    private var idleSinceMs = -1L
 
-    /** Mode, queue length, current and last finished movement id, as the robot reported them. */
+    /** Mode, queue length, current and last finished movement id, as the robot reported them (full state only). */
     public val state: StateFlow<StateLocomotion> = _state.asStateFlow()
 
-    /** What drives the motors now, or null for a code this SDK does not know. */
-    public val mode: LocoMode? get() = LocoMode.fromCode(_state.value.mode)
+    /** What drives the motors now. */
+    public val mode: LocoMode get() = modeOf(_state.value)
+
+    /** The movements this host queued that have not ended yet, in order: the robot's queue as this host knows it. */
+    public val queue: StateFlow<List<MovementHandle>> = _queue.asStateFlow()
 
     /**
      * Queues [movement] behind the ones already queued; suspends until the robot acknowledged it (not until it
@@ -69,58 +112,202 @@ public class Locomotion internal constructor(private val robot: Robot) {
     public suspend fun enqueue(movement: Movement): MovementHandle = enqueue(movement, null)
 
     internal suspend fun enqueue(movement: Movement, beforeFirstSend: (suspend () -> Unit)?): MovementHandle {
-        val handle = robot.serial {
+        val (handle, generation) = link.serial {
             lastId = lastId % 0xFFFF + 1
-            MovementHandle(robot, lastId, movement).also { outstanding.addLast(it) }
+            val h = MovementHandle(link, lastId, movement)
+            outstanding += h
+            publish()
+            h to stopGeneration
         }
         try {
-            robot.command(movement.toPacket(handle.id), beforeFirstSend)
+            link.command(movement.toPacket(handle.id), wanted = { stopGeneration == generation }, beforeFirstSend = beforeFirstSend)
+            link.serial { handle.acked = true }
+        } catch (e: CommandWithdrawnException) {
+            link.serial {
+                if (e.everSent) {
+                    // It went out but was never acknowledged: the robot's log says whether it got there.
+                    handle.uncertain = true
+                    checkLogSoon()
+                } else {
+                    end(handle, MovementOutcome.DROPPED, 0.0, "withdrawn by a stop before it was sent")
+                }
+            }
         } catch (e: Throwable) {
-            robot.serial { outstanding.remove(handle) }
+            link.serial {
+                outstanding.remove(handle)
+                publish()
+            }
             handle.result.completeExceptionally(e)
             throw e
         }
         return handle
     }
 
-    /** Suspends until every movement this host queued so far finished or was cancelled. */
+    /** Suspends until every movement this host queued so far has ended. */
     public suspend fun awaitIdle() {
-        val handles = robot.serial { outstanding.toList() }
+        val handles = link.serial { outstanding.toList() }
         for (h in handles) h.await()
     }
 
     /**
-     * Clears the robot's queue and stops: braking on the speed profile, or with [immediate] motors off at once.
-     * Also ends teleoperation and line following. Queued movements end as [MovementResult.CANCELLED].
+     * Stops the robot: clears its queue and brakes the running movement along the speed profile, or with
+     * [immediate] turns the motors off at once. Also ends teleoperation and line following. The stop goes out ahead
+     * of everything, even during an outage (then first after the reconnect); movements queued on this host and not
+     * yet sent are withdrawn. Suspends until the robot acknowledged the stop; each movement then ends as
+     * [MovementOutcome.STOPPED] (the running one, with how far it got) or [MovementOutcome.DROPPED].
      */
     public suspend fun stop(immediate: Boolean = false) {
-        robot.command(Stop(if (immediate) 1 else 0))
-        robot.serial {
-            while (outstanding.isNotEmpty()) outstanding.removeFirst().result.complete(MovementResult.CANCELLED)
-        }
+        link.serial { stopGeneration++ }
+        link.urgent(Stop(if (immediate) 1 else 0))
     }
 
     /**
      * Teleoperation: the robot holds these wheel speeds (m/s, per-wheel PID) until the next command, or until its
-     * link failsafe stops it after settings.link.failsafe_timeout_ms without any packet (the SDK's heartbeat keeps
-     * the failsafe quiet while the link is up). Not acknowledged; returns false when the link is down.
+     * link failsafe stops it (see above). Clears the movement queue. Not acknowledged; returns false when the link is
+     * down.
      */
-    public suspend fun setWheelSpeeds(leftMps: Double, rightMps: Double): Boolean =
-        robot.sendUnacked(WheelSpeeds(leftMps.toFloat(), rightMps.toFloat()))
-
-    internal fun finished(id: Int) {
-        val index = outstanding.indexOfFirst { it.id == id }
-        if (index < 0) return
-        // The firmware runs its queue in order: everything before this one finished too.
-        repeat(index + 1) { outstanding.removeFirst().result.complete(MovementResult.FINISHED) }
+    public suspend fun setWheelSpeeds(leftMps: Double, rightMps: Double): Boolean {
+        require(leftMps.isFinite() && rightMps.isFinite()) { "wheel speeds must be finite" }
+        return link.sendUnacked(WheelSpeeds(leftMps.toFloat(), rightMps.toFloat()))
     }
 
-    internal fun update(state: StateLocomotion) {
-        _state.value = state
-        if (state.finishedId != lastFinishedSeen) {
-            // Only a change counts: a stale finished_id from an earlier session must not finish a new movement.
-            if (lastFinishedSeen != -1 && state.finishedId != 0) finished(state.finishedId)
-            lastFinishedSeen = state.finishedId
+    // ---- what the robot reports (on the link's serial context) ----
+
+    internal fun reported(p: MovementDone) {
+        val index = outstanding.indexOfFirst { it.id == p.id }
+        if (index < 0) return
+        val h = outstanding[index]
+        val outcome = outcomeOf(p.outcome)
+        end(h, outcome, p.done.toDouble(), describe(outcome))
+        // The robot reports in queue order: an earlier movement still open lost its report on the way.
+        if ((0 until index).any { outstanding.getOrNull(it)?.acked == true }) checkLogSoon()
+    }
+
+    /**
+     * A frame from the robot was lost: if it was a `movement_done`, nothing else says so while the robot sends
+     * reduced state or none, so the log is read once the robot had time to settle.
+     */
+    internal fun reportMayBeLost() {
+        if (outstanding.any { it.acked }) checkLogSoon()
+    }
+
+    internal fun logArrived(log: MovementLog) {
+        logWaiter?.complete(log) ?: settle(log, resumed = true)
+    }
+
+    internal fun update(s: StateLocomotion, timeMs: Long) {
+        _state.value = s
+        // A robot that stands idle while movements are open lost their reports: its log knows.
+        val idle = s.queueLength == 0 && s.currentId == 0
+        if (!idle || outstanding.none { it.acked }) {
+            idleSinceMs = -1
+            return
+        }
+        if (idleSinceMs < 0 || timeMs < idleSinceMs) idleSinceMs = timeMs
+        else if (timeMs - idleSinceMs >= SETTLE_MS) {
+            idleSinceMs = -1
+            checkLogSoon()
+        }
+    }
+
+    /** After a reconnect or a robot reset: ends every handle the robot no longer holds, with what its log says. */
+    internal suspend fun reconcile(exchange: suspend (Packet) -> Unit, resumed: Boolean) {
+        val waiter = CompletableDeferred<MovementLog>()
+        logWaiter = waiter
+        try {
+            exchange(ReadMovements)
+        } finally {
+            logWaiter = null
+        }
+        // The log comes before the ack on the same ordered link.
+        @OptIn(kotlinx.coroutines.ExperimentalCoroutinesApi::class)
+        val log = if (waiter.isCompleted) waiter.getCompleted() else null
+        settle(log ?: throw RobotException("the robot acknowledged read_movements without its log"), resumed)
+    }
+
+    internal fun robotHolds(packet: Packet): Boolean = when (packet) {
+        is MoveStraight -> packet.id in heldIds
+        is MoveRotate -> packet.id in heldIds
+        is MoveArc -> packet.id in heldIds
+        else -> false
+    }
+
+    private fun settle(log: MovementLog, resumed: Boolean) {
+        val entries = HashMap<Int, Pair<MovementOutcome, Float>>()
+        for (i in 0 until log.count.coerceIn(0, log.ids.size)) entries[log.ids[i]] = outcomeOf(log.outcomes[i]) to log.done[i]
+        for (h in outstanding.toList()) {
+            val e = entries[h.id] ?: continue
+            end(h, e.first, e.second.toDouble(), describe(e.first))
+        }
+        // The robot's queue is the running movement and the ones this host queued after it.
+        val at = if (log.currentId != 0) outstanding.indexOfFirst { it.id == log.currentId } else -1
+        val held = if (at >= 0) outstanding.subList(at, minOf(outstanding.size, at + maxOf(1, log.queueLength))).toSet() else emptySet()
+        heldIds = entries.keys + held.map { it.id }
+        var suspects = false
+        for (h in outstanding.toList()) {
+            when {
+                h in held -> h.missing = false
+                h.uncertain -> end(h, MovementOutcome.DROPPED, 0.0, "withdrawn by a stop; it never reached the robot")
+                !h.acked -> {} // its command is still on its way and goes out again after the reconnect
+                h.missing -> end(
+                    h, MovementOutcome.LOST, null,
+                    if (resumed) "the robot has no record of it" else "the robot has no record of it: it was reset or served another host",
+                )
+                else -> {
+                    h.missing = true
+                    suspects = true
+                }
+            }
+        }
+        // A movement that just ended is reported once the robot stands still: look again after that.
+        if (suspects) checkLogSoon()
+    }
+
+    /** Reads the movement log once the robot had time to settle; at most one such look is pending at a time. */
+    private fun checkLogSoon() {
+        if (logCheck?.isActive == true) return
+        logCheck = link.launch {
+            delay(SETTLE_MS.milliseconds)
+            try {
+                link.command(ReadMovements)
+            } catch (e: CancellationException) {
+                throw e
+            } catch (e: Throwable) {
+                link.debugLog.host(1, "reading the movement log failed: ${e.message}")
+            }
+        }
+    }
+
+    private fun end(h: MovementHandle, outcome: MovementOutcome, done: Double?, detail: String) {
+        if (!h.result.complete(MovementResult(h.movement, outcome, done, detail))) return
+        outstanding.remove(h)
+        publish()
+    }
+
+    private fun publish() {
+        _queue.value = outstanding.toList()
+    }
+
+    private companion object {
+        /** Longer than the robot takes to stand still and report after a movement ends (about 300 ms at most). */
+        const val SETTLE_MS = 500L
+
+        fun outcomeOf(code: Int): MovementOutcome = when (code) {
+            WireOutcome.FINISHED.code -> MovementOutcome.FINISHED
+            WireOutcome.STOPPED.code -> MovementOutcome.STOPPED
+            WireOutcome.FAILSAFE.code -> MovementOutcome.FAILSAFE
+            WireOutcome.DROPPED.code -> MovementOutcome.DROPPED
+            else -> MovementOutcome.LOST
+        }
+
+        fun modeOf(s: StateLocomotion): LocoMode = s.mode
+
+        fun describe(o: MovementOutcome): String = when (o) {
+            MovementOutcome.FINISHED -> "finished"
+            MovementOutcome.STOPPED -> "stopped by a command of this host"
+            MovementOutcome.FAILSAFE -> "cut by the robot's link failsafe: no packet from the host for link.failsafe_timeout_ms"
+            MovementOutcome.DROPPED -> "cleared from the queue before it started"
+            MovementOutcome.LOST -> "the robot has no record of it"
         }
     }
 }

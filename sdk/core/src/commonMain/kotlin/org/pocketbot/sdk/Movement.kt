@@ -5,9 +5,19 @@ import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
 import org.pocketbot.protocol.Packet
 
-/** A movement the robot's firmware executes on its own with a smooth three-segment speed profile. */
+/**
+ * A movement the robot's firmware executes on its own with a smooth three-segment speed profile. Each kind has a
+ * main quantity in which [MovementResult.done] reports how much of it was done: metres for [Straight], degrees for
+ * [Rotate] and [Arc].
+ */
 public sealed class Movement {
     internal abstract fun toPacket(id: Int): Packet
+
+    /** The main quantity asked for, in [unit]. */
+    public abstract val amount: Double
+
+    /** The unit of [amount] and of [MovementResult.done]: `m` or `deg`. */
+    public abstract val unit: String
 
     /**
      * Drive [distanceM] metres straight (negative: backwards) at a cruise speed of [speedMps] m/s (> 0).
@@ -16,42 +26,99 @@ public sealed class Movement {
      * Movement.Straight(distanceM = 0.10, speedMps = 0.2)   // 10 cm forward at 20 cm/s
      * ```
      */
-    public data class Straight(public val distanceM: Double, public val speedMps: Double) : Movement() {
+    public class Straight(public val distanceM: Double, public val speedMps: Double) : Movement() {
         init {
-            require(speedMps > 0) { "speedMps must be > 0, was $speedMps" }
+            require(distanceM.isFinite()) { "distanceM must be finite, was $distanceM" }
+            require(speedMps > 0 && speedMps.isFinite()) { "speedMps must be > 0, was $speedMps" }
         }
 
+        override val amount: Double get() = distanceM
+        override val unit: String get() = "m"
         override fun toPacket(id: Int): Packet = MoveStraight(id, distanceM.toFloat(), speedMps.toFloat())
+        override fun equals(other: Any?): Boolean = other is Straight && distanceM == other.distanceM && speedMps == other.speedMps
+        override fun hashCode(): Int = distanceM.hashCode() * 31 + speedMps.hashCode()
+        override fun toString(): String = "Straight(${distanceM} m at $speedMps m/s)"
     }
 
     /** Rotate in place by [angleDeg] degrees (positive: left, counter-clockwise), wheels at [speedMps] m/s (> 0). */
-    public data class Rotate(public val angleDeg: Double, public val speedMps: Double) : Movement() {
+    public class Rotate(public val angleDeg: Double, public val speedMps: Double) : Movement() {
         init {
-            require(speedMps > 0) { "speedMps must be > 0, was $speedMps" }
+            require(angleDeg.isFinite()) { "angleDeg must be finite, was $angleDeg" }
+            require(speedMps > 0 && speedMps.isFinite()) { "speedMps must be > 0, was $speedMps" }
         }
 
+        override val amount: Double get() = angleDeg
+        override val unit: String get() = "deg"
         override fun toPacket(id: Int): Packet = MoveRotate(id, angleDeg.toFloat(), speedMps.toFloat())
+        override fun equals(other: Any?): Boolean = other is Rotate && angleDeg == other.angleDeg && speedMps == other.speedMps
+        override fun hashCode(): Int = angleDeg.hashCode() * 31 + speedMps.hashCode()
+        override fun toString(): String = "Rotate($angleDeg deg at $speedMps m/s)"
     }
 
     /**
      * Move the robot centre along a circle of [radiusM] metres (> 0) through [angleDeg] degrees (positive: left
      * turn, negative: right turn) at a cruise speed of [speedMps] m/s (> 0).
      */
-    public data class Arc(public val radiusM: Double, public val angleDeg: Double, public val speedMps: Double) : Movement() {
+    public class Arc(public val radiusM: Double, public val angleDeg: Double, public val speedMps: Double) : Movement() {
         init {
-            require(radiusM > 0) { "radiusM must be > 0, was $radiusM" }
-            require(speedMps > 0) { "speedMps must be > 0, was $speedMps" }
+            require(radiusM > 0 && radiusM.isFinite()) { "radiusM must be > 0, was $radiusM" }
+            require(angleDeg.isFinite()) { "angleDeg must be finite, was $angleDeg" }
+            require(speedMps > 0 && speedMps.isFinite()) { "speedMps must be > 0, was $speedMps" }
         }
 
+        override val amount: Double get() = angleDeg
+        override val unit: String get() = "deg"
         override fun toPacket(id: Int): Packet = MoveArc(id, radiusM.toFloat(), angleDeg.toFloat(), speedMps.toFloat())
+        override fun equals(other: Any?): Boolean =
+            other is Arc && radiusM == other.radiusM && angleDeg == other.angleDeg && speedMps == other.speedMps
+
+        override fun hashCode(): Int = (radiusM.hashCode() * 31 + angleDeg.hashCode()) * 31 + speedMps.hashCode()
+        override fun toString(): String = "Arc(r=$radiusM m through $angleDeg deg at $speedMps m/s)"
     }
 }
 
 /** How a queued movement ended. */
-public enum class MovementResult {
-    /** The robot reported it finished. */
+public enum class MovementOutcome {
+    /** It ran to its end. */
     FINISHED,
 
-    /** [Locomotion.stop] cleared it from the queue before it finished (or the robot reset). */
-    CANCELLED,
+    /** A command of this host ([Locomotion.stop], teleoperation, line following) ended it while it ran. */
+    STOPPED,
+
+    /**
+     * The robot's link failsafe ended it, running or still queued: the robot heard nothing from the host for
+     * settings.link.failsafe_timeout_ms and stopped on its own.
+     */
+    FAILSAFE,
+
+    /** It never started: a stop (or teleoperation, line following) cleared it from the queue, or withdrew it before it was sent. */
+    DROPPED,
+
+    /** The robot no longer holds it and has no record of how it ended: it was reset, or another host cleared its log. */
+    LOST,
+}
+
+/**
+ * How a movement ended, as the robot reported it.
+ *
+ * @property outcome what ended it.
+ * @property done how much of it was done, in the unit of the movement's main quantity ([Movement.unit], signed like
+ *   [Movement.amount]), measured by the robot's encoders once it stood still; null when nobody knows ([MovementOutcome.LOST]).
+ * @property detail a sentence for people: what happened.
+ */
+public class MovementResult internal constructor(
+    public val movement: Movement,
+    public val outcome: MovementOutcome,
+    public val done: Double?,
+    public val detail: String,
+) {
+    override fun equals(other: Any?): Boolean =
+        other is MovementResult && movement == other.movement && outcome == other.outcome && done == other.done
+
+    override fun hashCode(): Int = (movement.hashCode() * 31 + outcome.hashCode()) * 31 + done.hashCode()
+
+    override fun toString(): String =
+        "$outcome${done?.let { " after ${round3(it)} ${movement.unit} of ${round3(movement.amount)}" } ?: ""}: $detail"
+
+    private fun round3(v: Double): String = (kotlin.math.round(v * 1000) / 1000).toString()
 }

@@ -4,35 +4,23 @@ import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
 import org.pocketbot.protocol.StateEncoders
+import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.math.PI
+import kotlin.math.abs
 import kotlin.math.cos
-import kotlin.math.hypot
 import kotlin.math.sin
 
 /**
- * A position on the floor: [xM] and [yM] in metres, [headingRad] in radians counter-clockwise from the x axis
- * (the robot starts at the origin facing +x). [Odometry] does not wrap the heading: after a full left turn it is
- * 2*pi, so turns can be counted.
+ * How far each wheel rolled since [Odometry.reset], in metres (signed: backwards is negative), and how far the robot's
+ * centre travelled along its path ([travelledM], never negative: a turn in place adds nothing).
  */
-public data class Pose(public val xM: Double = 0.0, public val yM: Double = 0.0, public val headingRad: Double = 0.0) {
-    /** The heading in degrees. */
-    public val headingDeg: Double get() = headingRad * 180.0 / PI
+public class WheelDistances internal constructor(public val leftM: Double, public val rightM: Double, public val travelledM: Double) {
+    override fun equals(other: Any?): Boolean = other is WheelDistances && leftM == other.leftM && rightM == other.rightM && travelledM == other.travelledM
+    override fun hashCode(): Int = (leftM.hashCode() * 31 + rightM.hashCode()) * 31 + travelledM.hashCode()
+    override fun toString(): String = "WheelDistances(left=$leftM m, right=$rightM m, travelled=$travelledM m)"
 
-    /** Straight-line distance to [other] in metres. */
-    public fun distanceTo(other: Pose): Double = hypot(xM - other.xM, yM - other.yM)
-
-    override fun toString(): String {
-        fun f(v: Double, digits: Int): String {
-            val scale = listOf(1.0, 10.0, 100.0, 1000.0, 10000.0)[digits]
-            val r = kotlin.math.round(v * scale) / scale
-            return r.toString()
-        }
-        return "Pose(x=${f(xM * 1000, 1)} mm, y=${f(yM * 1000, 1)} mm, heading=${f(headingDeg, 2)} deg)"
-    }
-
-    public companion object {
-        /** The origin, facing +x. */
-        public val ORIGIN: Pose = Pose()
+    internal companion object {
+        val ZERO = WheelDistances(0.0, 0.0, 0.0)
     }
 }
 
@@ -44,29 +32,45 @@ public data class Pose(public val xM: Double = 0.0, public val yM: Double = 0.0,
  * left and right counts since [reset]. Each translation `d = pi*2r*(t1 + t2) / (2T)` is applied along the mean of
  * the headings before and after the update. r, l and T come from the robot's settings (geometry.wheel_diameter_m,
  * geometry.wheel_base_m, encoder.pulses_per_rev), read again on every update.
+ *
+ * When the robot resets (its clock starts again) its counts restart at zero: odometry keeps the pose it had and
+ * counts on from the new zero; what the robot did while it was unheard is not known.
  */
-public class Odometry internal constructor(private val robot: Robot) {
+public class Odometry internal constructor(private val link: LinkPort, private val settings: RobotSettings) {
     private val _pose = MutableStateFlow(Pose.ORIGIN)
+    private val _wheels = MutableStateFlow(WheelDistances.ZERO)
     private var baseLeft = 0
     private var baseRight = 0
     private var lastLeft = 0
     private var lastRight = 0
+    private var lastTimeMs = -1L
     private var started = false
     private var pendingReset: Pose? = Pose.ORIGIN
+    private var carryLeft = 0L
+    private var carryRight = 0L
     private var baseHeading = 0.0
     private var x = 0.0
     private var y = 0.0
+    private var travelled = 0.0
 
     /** The dead-reckoned pose, updated with every state update. */
     public val pose: StateFlow<Pose> = _pose.asStateFlow()
 
+    /** The dead-reckoned path: a point whenever the pose moved 1 mm or turned 1 degree (see [Trajectory]). */
+    public val trajectory: Trajectory = Trajectory()
+
+    /** The wheel distances and the distance travelled since [reset], from the encoders and the robot's geometry. */
+    public val wheelDistances: StateFlow<WheelDistances> = _wheels.asStateFlow()
+
     /**
-     * Makes the current position [pose] (default: the origin facing +x): the encoder counts of the last state
-     * update become the new zero, so movements queued after this call all count from [pose]. Before the first
-     * state update it takes effect with that update. Safe to call from any thread.
+     * Makes the current position [pose] (default: the origin facing +x) and zeroes [wheelDistances]: the encoder
+     * counts of the last state update become the new zero, so movements queued after this call all count from
+     * [pose]. Before the first state update it takes effect with that update. The [trajectory] starts again from
+     * [pose] (the old path was in the old frame). Safe to call from any thread.
      */
     public suspend fun reset(pose: Pose = Pose.ORIGIN) {
-        robot.serial {
+        link.serial {
+            trajectory.clear()
             if (started) rebase(lastLeft, lastRight, pose) else pendingReset = pose
         }
     }
@@ -74,38 +78,67 @@ public class Odometry internal constructor(private val robot: Robot) {
     private fun rebase(left: Int, right: Int, p: Pose) {
         baseLeft = left
         baseRight = right
+        carryLeft = 0
+        carryRight = 0
         lastLeft = left
         lastRight = right
         baseHeading = p.headingRad
+        travelled = 0.0
         x = p.xM
         y = p.yM
         _pose.value = p
+        trajectory.add(lastTimeMs, p)
+        publishWheels()
     }
 
-    internal fun update(encoders: StateEncoders) {
+    /** Pulses counted since [reset], carried over robot resets. */
+    private fun totalLeft(left: Int): Long = carryLeft + (left - baseLeft)
+    private fun totalRight(right: Int): Long = carryRight + (right - baseRight)
+
+    // From the decoded settings struct: read on every state update, so no per-field decoding here.
+    private fun metresPerPulse(): Double = settings.store.values.value.let { PI * it.geometry.wheelDiameterM / it.encoder.pulsesPerRev }
+    private fun wheelBase(): Double = settings.store.values.value.geometry.wheelBaseM.toDouble()
+
+    internal fun update(encoders: StateEncoders, timeMs: Long) {
+        val reset = lastTimeMs >= 0 && timeMs < lastTimeMs
+        lastTimeMs = timeMs
         if (!started) {
             rebase(encoders.left, encoders.right, pendingReset ?: Pose.ORIGIN)
             started = true
             pendingReset = null
             return
         }
-        val s = robot.settings
-        val wheelDiameter = s.geometry.wheelDiameterM.value.toDouble()
-        val wheelBase = s.geometry.wheelBaseM.value.toDouble()
-        val pulses = s.encoder.pulsesPerRev.value.toDouble()
-        val metresPerPulse = PI * wheelDiameter / pulses
+        if (reset) {
+            // The robot's counts start again from its new zero: carry what was counted before.
+            carryLeft = totalLeft(lastLeft)
+            carryRight = totalRight(lastRight)
+            baseLeft = encoders.left
+            baseRight = encoders.right
+            lastLeft = encoders.left
+            lastRight = encoders.right
+            return
+        }
+        val metresPerPulse = metresPerPulse()
         // Int subtraction wraps like the firmware's 32-bit counters.
         val t1 = encoders.left - lastLeft
         val t2 = encoders.right - lastRight
         if (t1 == 0 && t2 == 0) return
         val before = _pose.value.headingRad
-        val heading = baseHeading + metresPerPulse / wheelBase * ((encoders.right - baseRight) - (encoders.left - baseLeft)).toDouble()
+        val heading = baseHeading + metresPerPulse / wheelBase() * (totalRight(encoders.right) - totalLeft(encoders.left)).toDouble()
         val d = metresPerPulse * (t1.toDouble() + t2.toDouble()) / 2.0
         val mid = (before + heading) / 2.0
         x += d * cos(mid)
         y += d * sin(mid)
+        travelled += abs(d)
         lastLeft = encoders.left
         lastRight = encoders.right
         _pose.value = Pose(x, y, heading)
+        trajectory.add(timeMs, _pose.value)
+        publishWheels()
+    }
+
+    private fun publishWheels() {
+        val m = metresPerPulse()
+        _wheels.value = WheelDistances(totalLeft(lastLeft) * m, totalRight(lastRight) * m, travelled)
     }
 }

@@ -11,9 +11,18 @@ import org.pocketbot.protocol.DistanceClass
 import org.pocketbot.protocol.IrLed
 import org.pocketbot.protocol.IrReceived
 import org.pocketbot.protocol.IrSend
+import org.pocketbot.protocol.ProximityFlags
 import org.pocketbot.protocol.ProximitySide
 import org.pocketbot.protocol.Side
 import org.pocketbot.protocol.StateProximity
+import org.pocketbot.sdk.internal.EMPTY_STATE
+import org.pocketbot.sdk.internal.link.LinkPort
+
+/** True when this receiver sees an obstacle by its own IR reflection (no robot's beacon). */
+public val ProximitySide.seesObstacle: Boolean get() = flags and ProximityFlags.OBSTACLE != 0
+
+/** True when this receiver hears another robot's beacon ([ProximitySide.robotId] says which). */
+public val ProximitySide.hearsRobot: Boolean get() = flags and ProximityFlags.ROBOT != 0
 
 /**
  * Another robot seen by one of our IR receivers.
@@ -25,23 +34,29 @@ import org.pocketbot.protocol.StateProximity
  * @property distance rough distance class, from the lowest IR power it was heard at.
  * @property timeMs robot time of the state that reported it (ms).
  */
-public data class Encounter(
+public class Encounter internal constructor(
     public val robotId: Int,
     public val side: Side,
-    public val orientation: IrLed?,
-    public val distance: DistanceClass?,
+    public val orientation: IrLed,
+    public val distance: DistanceClass,
     public val timeMs: Long,
-)
+) {
+    override fun equals(other: Any?): Boolean = other is Encounter && robotId == other.robotId && side == other.side &&
+        orientation == other.orientation && distance == other.distance && timeMs == other.timeMs
+
+    override fun hashCode(): Int = listOf(robotId, side, orientation, distance, timeMs).hashCode()
+    override fun toString(): String = "Encounter(robot $robotId on the ${side.name.lowercase()}, facing ${orientation.name.lowercase()}, ${distance.name.lowercase()}, at $timeMs ms)"
+}
 
 /**
  * An IR message another robot sent with [Proximity.send].
  *
  * @property powerPercent the sender's transmit power.
  */
-public class IrMessage(
+public class IrMessage internal constructor(
     public val senderId: Int,
-    public val side: Side?,
-    public val senderLed: IrLed?,
+    public val side: Side,
+    public val senderLed: IrLed,
     public val powerPercent: Int,
     payload: ByteArray,
 ) {
@@ -58,8 +73,8 @@ public class IrMessage(
  * reflection. [encounters] reports when a receiver starts hearing a robot or what it hears changes; [messages]
  * reports payloads sent by other robots.
  */
-public class Proximity internal constructor(private val robot: Robot) {
-    private val _state = MutableStateFlow(StateProximity(ProximitySide(0, 0, 0, 0), ProximitySide(0, 0, 0, 0)))
+public class Proximity internal constructor(private val link: LinkPort) {
+    private val _state = MutableStateFlow(EMPTY_STATE.proximity)
     private val _encounters = MutableSharedFlow<Encounter>(extraBufferCapacity = 64, onBufferOverflow = BufferOverflow.DROP_OLDEST)
     private val _messages = MutableSharedFlow<IrMessage>(extraBufferCapacity = 64, onBufferOverflow = BufferOverflow.DROP_OLDEST)
 
@@ -73,10 +88,10 @@ public class Proximity internal constructor(private val robot: Robot) {
     public val messages: SharedFlow<IrMessage> = _messages.asSharedFlow()
 
     /** True while the front receiver sees an obstacle by its own reflection. */
-    public val obstacleFront: Boolean get() = _state.value.front.flags and 1 != 0
+    public val obstacleFront: Boolean get() = _state.value.front.seesObstacle
 
     /** True while the rear receiver sees an obstacle by its own reflection. */
-    public val obstacleRear: Boolean get() = _state.value.rear.flags and 1 != 0
+    public val obstacleRear: Boolean get() = _state.value.rear.seesObstacle
 
     /**
      * Sends [payload] (at most 8 bytes) with the next IR beacons at [powerPercent] (1..100) to robots nearby;
@@ -85,7 +100,7 @@ public class Proximity internal constructor(private val robot: Robot) {
     public suspend fun send(payload: ByteArray, powerPercent: Int = 100) {
         require(payload.size <= 8) { "an IR payload has at most 8 bytes, not ${payload.size}" }
         require(powerPercent in 1..100) { "powerPercent $powerPercent is outside 1..100" }
-        robot.command(IrSend(powerPercent, payload.copyOf()))
+        link.command(IrSend(powerPercent, payload.copyOf()))
     }
 
     internal fun update(s: StateProximity, timeMs: Long) {
@@ -96,11 +111,11 @@ public class Proximity internal constructor(private val robot: Robot) {
     }
 
     private fun check(side: Side, before: ProximitySide, now: ProximitySide, timeMs: Long) {
-        val hears = now.flags and 2 != 0 && now.robotId != 0
+        val hears = now.hearsRobot && now.robotId != 0
         if (!hears) return
-        val heard = before.flags and 2 != 0 && before.robotId != 0
+        val heard = before.hearsRobot && before.robotId != 0
         if (heard && before.robotId == now.robotId && before.robotLed == now.robotLed && before.distance == now.distance) return
-        _encounters.tryEmit(Encounter(now.robotId, side, IrLed.fromCode(now.robotLed), DistanceClass.fromCode(now.distance), timeMs))
+        _encounters.tryEmit(Encounter(now.robotId, side, now.robotLed, now.distance, timeMs))
     }
 
     internal fun received(p: IrReceived) {

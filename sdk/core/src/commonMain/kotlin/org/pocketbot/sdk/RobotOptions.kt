@@ -18,10 +18,12 @@ import kotlin.time.Duration.Companion.seconds
  * @property settingsReadTimeout how long a whole `read_settings` answer may take.
  * @property silenceTimeout while the robot is asked to send state, no frame for this long means the link is lost.
  * @property heartbeatPeriod the longest quiet time before a `heartbeat`; null = a third of
- *   settings.link.failsafe_timeout_ms (at most 1 s), so the robot's failsafe never stops host-driven motion.
+ *   settings.link.failsafe_timeout_ms (at most 1 s), so the robot's failsafe never stops host-driven motion while
+ *   the link is up.
  * @property reconnect backoff after a link loss.
- * @property settingsCache where learned settings are kept by robot id and layout hash, so that a second connect
- *   skips the full read; null reads on every connect. The cache trusts that no other host changed the settings.
+ * @property settingsCache where learned settings are kept, by the robot's address and layout; an entry is used only
+ *   when the robot's `hello` reports the same settings checksum, so a robot whose settings changed elsewhere is read
+ *   again. null reads on every connect.
  */
 public class RobotOptions(
     public val syncMode: SyncMode = SyncMode.FULL,
@@ -62,15 +64,22 @@ public class RobotOptions(
 }
 
 /**
- * Exponential backoff between reconnect attempts: [initialDelay], then times [factor] up to [maxDelay];
- * after [maxAttempts] failed attempts in a row the robot is closed.
+ * Backoff between reconnect attempts: [initialDelay], then times [factor] up to [maxDelay]; after [maxAttempts]
+ * failed attempts in a row the robot is closed. The cap is short on purpose: a link that comes back is noticed
+ * within [maxDelay] (a failed attempt on a link that is down costs little: a refused socket, an absent tty).
  */
 public class ReconnectPolicy(
     public val initialDelay: Duration = 50.milliseconds,
-    public val maxDelay: Duration = 2.seconds,
+    public val maxDelay: Duration = 250.milliseconds,
     public val factor: Double = 2.0,
     public val maxAttempts: Int = Int.MAX_VALUE,
 ) {
+    init {
+        require(!initialDelay.isNegative() && maxDelay >= initialDelay) { "need 0 <= initialDelay <= maxDelay" }
+        require(factor >= 1.0) { "factor must be at least 1" }
+        require(maxAttempts >= 1) { "maxAttempts must be at least 1" }
+    }
+
     internal fun delayBefore(attempt: Int): Duration {
         var d = initialDelay
         repeat(attempt - 1) { d = minOf(maxDelay, d * factor) }

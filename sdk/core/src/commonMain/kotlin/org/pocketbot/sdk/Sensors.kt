@@ -4,6 +4,7 @@ import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
 import org.pocketbot.protocol.Colour
+import org.pocketbot.protocol.LineFlags
 import org.pocketbot.protocol.StateAccel
 import org.pocketbot.protocol.StateColour
 import org.pocketbot.protocol.StateLine
@@ -24,10 +25,10 @@ public class LineSensor internal constructor() {
     public val positionPermille: Int get() = _reading.value.position
 
     /** True while a spot sees the line. */
-    public val lineSeen: Boolean get() = _reading.value.flags and 1 != 0
+    public val lineSeen: Boolean get() = _reading.value.flags and LineFlags.SEEN != 0
 
     /** True after the line was lost for longer than settings.line_follow.lost_timeout_ms. */
-    public val lineLost: Boolean get() = _reading.value.flags and 2 != 0
+    public val lineLost: Boolean get() = _reading.value.flags and LineFlags.LOST != 0
 
     internal fun update(line: StateLine) {
         _reading.value = line
@@ -36,13 +37,13 @@ public class LineSensor internal constructor() {
 
 /** The colour sensor under the robot (full state only). */
 public class ColourSensor internal constructor() {
-    private val _reading = MutableStateFlow(StateColour(0, 0, 0, 0, 0))
+    private val _reading = MutableStateFlow(StateColour(0, 0, 0, 0, Colour.UNKNOWN))
 
     /** Red, green, blue and clear channels (0..255) and the classified colour code. */
     public val reading: StateFlow<StateColour> = _reading.asStateFlow()
 
     /** The classified surface colour, [Colour.UNKNOWN] for a code this SDK does not know. */
-    public val detected: Colour get() = Colour.fromCode(_reading.value.detected) ?: Colour.UNKNOWN
+    public val detected: Colour get() = _reading.value.detected
 
     internal fun update(c: StateColour) {
         _reading.value = c

@@ -6,23 +6,29 @@ import kotlinx.coroutines.flow.map
 import org.pocketbot.protocol.FieldType
 import org.pocketbot.protocol.SettingsFieldInfo
 import org.pocketbot.protocol.UpdateSettings
+import org.pocketbot.sdk.internal.SettingsMirror
+import org.pocketbot.sdk.internal.link.LinkPort
 import org.pocketbot.sdk.internal.readNumber
 import org.pocketbot.sdk.internal.writeNumber
 
 /**
  * One leaf of the robot's settings struct (thesis 9.6), e.g. `robot.settings.linePid.kp`.
  *
+ * Every setting has one [name], its path in the protocol definition (`line_pid.kp`): `robot.settings["line_pid.kp"]`,
+ * the JSON export (`{"line_pid": {"kp": ...}}`, grouped by the part before the dot), the command line and the docs
+ * all use it; the Kotlin tree spells the same two parts in camelCase (`robot.settings.linePid.kp`).
+ *
  * [value] is the value the robot confirmed last. [set] sends only this field (`update_settings` with its offset and
  * bytes), suspends until the robot acknowledged it, retransmits on timeout, and throws [SettingRefusedException] when
  * the robot refuses it (the robot is the referee of [min]..[max]).
  */
 public sealed class SettingField<T> constructor(
-    private val robot: Robot,
-    /** Offset, type, count, range, unit and documentation, from the protocol definition. */
-    public val info: SettingsFieldInfo,
+    private val link: LinkPort,
+    private val mirror: SettingsMirror,
+    internal val info: SettingsFieldInfo,
 ) {
-    /** Dotted path in the protocol definition, e.g. `line_pid.kp`. */
-    public val path: String get() = info.path
+    /** The setting's one name, e.g. `line_pid.kp`. */
+    public val name: String get() = info.path
 
     /** Unit of the value (`m/s`, `ms`, ...), empty when it has none. */
     public val unit: String get() = info.unit
@@ -33,11 +39,14 @@ public sealed class SettingField<T> constructor(
     /** Highest value the robot accepts, null when unbounded. */
     public val max: Double? get() = info.max
 
+    /** What the setting does, from the protocol definition. */
+    public val doc: String get() = info.doc
+
     /** The value the robot confirmed last (read at connect, then every acknowledged write). */
-    public val value: T get() = decode(robot.settingsBytes)
+    public val value: T get() = decode(mirror.bytes.value)
 
     /** [value] now and after every change. */
-    public val changes: Flow<T> get() = robot.settings.values.map { decode(robot.settingsBytes) }.distinctUntilChanged()
+    public val changes: Flow<T> get() = mirror.bytes.map { decode(it) }.distinctUntilChanged()
 
     /**
      * Writes [value] to the robot; suspends until it acknowledged, then [value] reflects it.
@@ -49,43 +58,75 @@ public sealed class SettingField<T> constructor(
         val bytes = ByteArray(info.size)
         encode(value, bytes)
         try {
-            robot.command(UpdateSettings(info.offset, bytes))
+            link.command(UpdateSettings(info.offset, bytes))
         } catch (e: CommandRefusedException) {
-            throw SettingRefusedException(path, value, e.packetType, e.rawCode, e.detail)
+            throw SettingRefusedException(name, value, e.code, e.detail)
         }
-        robot.serial { robot.settingsWritten(info.offset, bytes) }
+        link.serial { mirror.written(info.offset, bytes) }
     }
+
+    /** Parses [text] as a value of this setting (as a person types it), for [set]. */
+    public abstract fun parse(text: String): T
 
     internal abstract fun decode(settings: ByteArray): T
     internal abstract fun encode(value: T, out: ByteArray)
 
-    override fun toString(): String = "$path = $value${if (unit.isEmpty()) "" else " $unit"}"
+    override fun toString(): String = "$name = $value${if (unit.isEmpty()) "" else " $unit"}"
 }
 
-/** A settings field holding a real number (f32). */
-public class FloatSetting internal constructor(robot: Robot, info: SettingsFieldInfo) : SettingField<Float>(robot, info) {
+/** A setting holding a real number (stored by the robot as binary32, so it reads back rounded to that). */
+public class DoubleSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
+    SettingField<Double>(link, mirror, info) {
     init {
-        require(info.type == FieldType.F32 && info.count == 1) { "${info.path} is not a float" }
+        require(info.type == FieldType.F32 && info.count == 1) { "${info.path} is not a real number" }
     }
 
-    override fun decode(settings: ByteArray): Float = readNumber(settings, info.offset, info.type).toFloat()
-    override fun encode(value: Float, out: ByteArray) = writeNumber(out, 0, info.type, value, path)
+    override fun parse(text: String): Double = text.trim().toDoubleOrNull() ?: throw IllegalArgumentException("$name needs a number, not \"$text\"")
+    override fun decode(settings: ByteArray): Double = readNumber(settings, info.offset, info.type).toDouble()
+    override fun encode(value: Double, out: ByteArray): Unit = writeNumber(out, 0, info.type, value, name)
 }
 
-/** A settings field holding an integer (u8, i8, u16, i16, i32). */
-public class IntSetting internal constructor(robot: Robot, info: SettingsFieldInfo) : SettingField<Int>(robot, info) {
+/** A setting holding an integer (u8, i8, u16, i16, i32). */
+public class IntSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
+    SettingField<Int>(link, mirror, info) {
     init {
         require(info.type != FieldType.F32 && info.type != FieldType.CHAR && info.type != FieldType.U32 && info.count == 1) {
             "${info.path} is not an integer"
         }
     }
 
+    override fun parse(text: String): Int = text.trim().toIntOrNull() ?: throw IllegalArgumentException("$name needs an integer, not \"$text\"")
     override fun decode(settings: ByteArray): Int = readNumber(settings, info.offset, info.type).toInt()
-    override fun encode(value: Int, out: ByteArray) = writeNumber(out, 0, info.type, value, path)
+    override fun encode(value: Int, out: ByteArray): Unit = writeNumber(out, 0, info.type, value, name)
 }
 
-/** A settings field holding a fixed number of integers (e.g. a calibration value per line sensor spot). */
-public class IntListSetting internal constructor(robot: Robot, info: SettingsFieldInfo) : SettingField<List<Int>>(robot, info) {
+/** A setting holding one of the named values of an enumeration of the protocol (e.g. the sync mode). */
+public class EnumSetting<E : Enum<E>> internal constructor(
+    link: LinkPort,
+    mirror: SettingsMirror,
+    info: SettingsFieldInfo,
+    /** Every value the setting can hold. */
+    public val values: List<E>,
+    private val codeOf: (E) -> Int,
+) : SettingField<E>(link, mirror, info) {
+    init {
+        require(info.type == FieldType.U8 && info.count == 1) { "${info.path} is not an enumeration" }
+    }
+
+    override fun parse(text: String): E = values.firstOrNull { it.name.equals(text.trim(), ignoreCase = true) }
+        ?: throw IllegalArgumentException("$name is one of ${values.joinToString { it.name.lowercase() }}, not \"$text\"")
+
+    override fun decode(settings: ByteArray): E {
+        val code = readNumber(settings, info.offset, info.type).toInt()
+        return values.firstOrNull { codeOf(it) == code } ?: values.first()
+    }
+
+    override fun encode(value: E, out: ByteArray): Unit = writeNumber(out, 0, info.type, codeOf(value), name)
+}
+
+/** A setting holding a fixed number of integers (e.g. a calibration value per line sensor spot). */
+public class IntListSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
+    SettingField<List<Int>>(link, mirror, info) {
     init {
         require(info.type != FieldType.F32 && info.type != FieldType.CHAR && info.count > 1) { "${info.path} is not an integer array" }
     }
@@ -93,23 +134,33 @@ public class IntListSetting internal constructor(robot: Robot, info: SettingsFie
     /** Number of elements. */
     public val count: Int get() = info.count
 
+    /** Parses `[1, 2, 3]` or `1,2,3`. */
+    override fun parse(text: String): List<Int> {
+        val parts = text.trim().removePrefix("[").removeSuffix("]").split(',').map { it.trim() }.filter { it.isNotEmpty() }
+        require(parts.size == count) { "$name holds $count values, not ${parts.size}" }
+        return parts.map { it.toIntOrNull() ?: throw IllegalArgumentException("$name needs integers, not \"$it\"") }
+    }
+
     override fun decode(settings: ByteArray): List<Int> =
         List(info.count) { readNumber(settings, info.offset + it * info.type.size, info.type).toInt() }
 
     override fun encode(value: List<Int>, out: ByteArray) {
-        require(value.size == info.count) { "$path holds ${info.count} values, not ${value.size}" }
-        value.forEachIndexed { i, v -> writeNumber(out, i * info.type.size, info.type, v, path) }
+        require(value.size == info.count) { "$name holds ${info.count} values, not ${value.size}" }
+        value.forEachIndexed { i, v -> writeNumber(out, i * info.type.size, info.type, v, name) }
     }
 }
 
-/** A settings field holding text (UTF-8, NUL-padded to its size). */
-public class TextSetting internal constructor(robot: Robot, info: SettingsFieldInfo) : SettingField<String>(robot, info) {
+/** A setting holding text (UTF-8, NUL-padded to its size). */
+public class TextSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
+    SettingField<String>(link, mirror, info) {
     init {
         require(info.type == FieldType.CHAR) { "${info.path} is not text" }
     }
 
     /** Largest length in UTF-8 bytes. */
     public val maxBytes: Int get() = info.count
+
+    override fun parse(text: String): String = text
 
     override fun decode(settings: ByteArray): String {
         var end = info.offset
@@ -119,7 +170,7 @@ public class TextSetting internal constructor(robot: Robot, info: SettingsFieldI
 
     override fun encode(value: String, out: ByteArray) {
         val raw = value.encodeToByteArray()
-        require(raw.size <= info.count) { "\"$value\" is longer than the $path field (${info.count} bytes)" }
+        require(raw.size <= info.count) { "\"$value\" is longer than the $name field (${info.count} bytes)" }
         raw.copyInto(out)
     }
 }

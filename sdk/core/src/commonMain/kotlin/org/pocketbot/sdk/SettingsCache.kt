@@ -3,13 +3,21 @@ package org.pocketbot.sdk
 import kotlinx.coroutines.sync.Mutex
 import kotlinx.coroutines.sync.withLock
 
-/** Identifies cached settings: a robot id under one settings layout. */
-public data class SettingsCacheKey(public val robotId: Int, public val layoutHash: Long)
+/**
+ * Identifies cached settings: the robot at [address] under one settings layout. Robot ids are no key: every robot
+ * starts with id 1.
+ */
+public class SettingsCacheKey(public val address: String, public val layoutHash: Long) {
+    override fun equals(other: Any?): Boolean = other is SettingsCacheKey && address == other.address && layoutHash == other.layoutHash
+    override fun hashCode(): Int = address.hashCode() * 31 + layoutHash.hashCode()
+    override fun toString(): String = "$address (layout 0x${layoutHash.toString(16).uppercase()})"
+}
 
 /**
  * Keeps the settings bytes learned from robots, so that connecting again to a known robot skips `read_settings`
- * (which takes a few hundred milliseconds per robot on a slow link). Implementations must be safe to call from any
- * coroutine.
+ * (which takes a few hundred milliseconds per robot on a slow link). The SDK uses an entry only when the robot's
+ * `hello` reports the same settings checksum, so an entry can be stale without harm. Implementations must be safe
+ * to call from any coroutine.
  */
 public interface SettingsCache {
     /** The cached settings bytes of [key], or null. */

@@ -3,8 +3,12 @@ package org.pocketbot.sdk
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
+import org.pocketbot.protocol.Packet
+import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.SetSync
 import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.internal.SettingsMirror
+import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.time.Duration
 import kotlin.time.Duration.Companion.milliseconds
 import kotlin.time.Duration.Companion.seconds
@@ -15,24 +19,30 @@ import kotlin.time.Duration.Companion.seconds
  * - [SyncMode.FULL]: the whole `robot_state` (88 bytes) every period: every module of [Robot] updates.
  * - [SyncMode.REDUCED]: encoders, wheel speeds and line position (19 bytes), for fast charts and odometry; the rest
  *   of [Robot.state] keeps its last full value.
- * - [SyncMode.NONE]: nothing; the state stays as it was.
+ * - [SyncMode.NONE]: nothing; the state stays as it was, and the SDK stops watching the link for silence.
  *
  * ```
  * robot.reflector.set(SyncMode.REDUCED, period = 5.milliseconds)
  * ```
- * The choice survives reconnects (it is re-sent after each handshake).
+ * The reflector is the one owner of the sync mode and period: writing `robot.settings.sync.mode` or `.periodMs`, or
+ * loading the defaults, changes it too. The choice survives reconnects and robot resets (it is sent again after
+ * each handshake).
  */
-public class StateReflector internal constructor(private val robot: Robot) {
-    private val _mode = MutableStateFlow(robot.options.syncMode)
-    private val _period = MutableStateFlow(robot.options.syncPeriod)
-    private var desiredMode = robot.options.syncMode
-    private var desiredPeriod = robot.options.syncPeriod
+public class StateReflector internal constructor(private val link: LinkPort, private val mirror: SettingsMirror) {
+    private val _mode = MutableStateFlow(link.options.syncMode)
+    private val _period = MutableStateFlow(link.options.syncPeriod)
+    private var desiredMode = link.options.syncMode
+    private var desiredPeriod = link.options.syncPeriod
 
     /** The sync mode the robot confirmed last. */
     public val mode: StateFlow<SyncMode> = _mode.asStateFlow()
 
     /** The period the robot confirmed last. */
     public val period: StateFlow<Duration> = _period.asStateFlow()
+
+    init {
+        mirror.onUserChange = { offset, data -> adopt(offset, data) }
+    }
 
     /**
      * Asks the robot for [mode] every [period] (1 ms .. 60 s, whole milliseconds) and suspends until it acknowledged.
@@ -41,32 +51,45 @@ public class StateReflector internal constructor(private val robot: Robot) {
      */
     public suspend fun set(mode: SyncMode, period: Duration = this.period.value) {
         require(period in 1.milliseconds..60.seconds) { "period $period is outside 1 ms .. 60 s" }
-        val previous = robot.serial {
-            val before = desiredMode to desiredPeriod
-            desiredMode = mode
-            desiredPeriod = period
-            before
-        }
-        try {
-            robot.command(desiredPacket())
-        } catch (e: Throwable) {
-            robot.serial {
-                desiredMode = previous.first
-                desiredPeriod = previous.second
-            }
-            throw e
-        }
-        robot.serial { confirmed() }
+        require(mode.code >= 0) { "$mode is no sync mode" }
+        link.command(SetSync(mode.code, period.inWholeMilliseconds.toInt()))
+        link.serial { confirm(mode, period) }
     }
 
-    internal fun desiredPacket(): SetSync = SetSync(desiredMode.code, desiredPeriod.inWholeMilliseconds.toInt())
+    /** After a handshake: the robot gets the mode it should have. */
+    internal suspend fun restore(exchange: suspend (Packet) -> Unit) {
+        exchange(SetSync(desiredMode.code, desiredPeriod.inWholeMilliseconds.toInt()))
+        confirm(desiredMode, desiredPeriod)
+    }
 
-    internal suspend fun confirmed() {
-        _mode.value = desiredMode
-        _period.value = desiredPeriod
-        val p = desiredPacket()
-        val bytes = byteArrayOf(p.mode.toByte(), p.periodMs.toByte(), (p.periodMs shr 8).toByte())
-        val at = robot.settings.sync.mode.info.offset
-        if (robot.settingsBytes.copyOfRange(at, at + 3).contentEquals(bytes).not()) robot.settingsWritten(at, bytes)
+    /** The robot runs [mode] every [period] now, and keeps them in settings.sync: the mirror says so too. */
+    private suspend fun confirm(mode: SyncMode, period: Duration) {
+        adopted(mode, period)
+        val ms = period.inWholeMilliseconds.toInt()
+        mirror.confirmed(MODE_OFFSET, byteArrayOf(mode.code.toByte()))
+        mirror.confirmed(PERIOD_OFFSET, byteArrayOf(ms.toByte(), (ms shr 8).toByte()))
+    }
+
+    private fun adopted(mode: SyncMode, period: Duration) {
+        desiredMode = mode
+        desiredPeriod = period
+        _mode.value = mode
+        _period.value = period
+    }
+
+    /** A confirmed change of the settings that touches settings.sync: the robot now runs what they say. */
+    private fun adopt(offset: Int, data: ByteArray) {
+        val end = offset + data.size
+        fun byte(at: Int): Int? = if (at in offset until end) data[at - offset].toInt() and 0xFF else null
+        val mode = byte(MODE_OFFSET)?.let { code -> SyncMode.entries.firstOrNull { it.code == code } }
+        val lo = byte(PERIOD_OFFSET)
+        val hi = byte(PERIOD_OFFSET + 1)
+        val period = if (lo != null && hi != null) (lo or (hi shl 8)).milliseconds else null
+        if (mode != null || period != null) adopted(mode ?: desiredMode, period ?: desiredPeriod)
+    }
+
+    private companion object {
+        val MODE_OFFSET = SETTINGS_FIELDS.single { it.path == "sync.mode" }.offset
+        val PERIOD_OFFSET = SETTINGS_FIELDS.single { it.path == "sync.period_ms" }.offset
     }
 }

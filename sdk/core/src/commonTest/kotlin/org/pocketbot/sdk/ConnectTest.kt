@@ -1,5 +1,6 @@
 package org.pocketbot.sdk
 
+import kotlinx.coroutines.plus
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.ReadSettings
@@ -15,13 +16,14 @@ class ConnectTest {
     @Test
     fun handshakeLearnsIdentitySettingsAndStartsSync() = runTest {
         val peer = ScriptedRobot(robotId = 9, name = "Nine")
-        peer.settings[70] = 0 // line_pid.kp low byte: a value only a real read can know
+        peer.poke("line_pid.kp", 0.0009765625) // not the default: only a real read can know it
         val robot = connect(peer, testOptions(syncMode = SyncMode.FULL))
         assertEquals(ConnectionState.Connected, robot.connection.value)
         assertEquals(9, robot.identity.robotId)
         assertEquals("Nine", robot.identity.name)
         assertEquals("0.1.0", robot.identity.firmwareVersion)
         assertEquals(9, robot.settings.identity.robotId.value)
+        assertEquals(0.0009765625, robot.settings.linePid.kp.value)
         assertEquals(1, peer.executed.count { it is ReadSettings })
         val sync = peer.executed.filterIsInstance<SetSync>().single()
         assertEquals(SyncMode.FULL.code, sync.mode)
@@ -33,11 +35,11 @@ class ConnectTest {
 
     @Test
     fun protocolMismatchNamesBothVersions() = runTest {
-        val peer = ScriptedRobot(protocolVersion = 2, layoutHash = 0x12345678)
+        val peer = ScriptedRobot(protocolVersion = 99, layoutHash = 0x12345678)
         val e = assertFailsWith<ProtocolMismatchException> { connect(peer) }
-        assertTrue("v2" in e.message!! && "v${ProtocolInfo.VERSION}" in e.message!!, e.message)
+        assertTrue("v99" in e.message!! && "v${ProtocolInfo.VERSION}" in e.message!!, e.message)
         assertTrue("0x12345678" in e.message!!, e.message)
-        assertEquals(2, e.robotVersion)
+        assertEquals(99, e.robotVersion)
     }
 
     @Test
@@ -47,24 +49,36 @@ class ConnectTest {
     }
 
     @Test
-    fun silentRobotFailsWithConnectFailed() = runTest {
+    fun silentRobotFailsWithConnectFailedCausedByATimeout() = runTest {
         val peer = ScriptedRobot().apply { answersHello = false }
         val e = assertFailsWith<ConnectFailedException> { connect(peer) }
         assertTrue("hello" in e.message!!, e.message)
+        // A link that is up but never answers is a timeout, not a lost link: tools tell the two apart by the cause
+        // (past the copies of the exception that coroutines' stack trace recovery may put in between).
+        val timeout = assertIs<CommandTimeoutException>(generateSequence(e.cause) { it.cause }.firstOrNull { it !is ConnectFailedException })
+        assertEquals("hello_request", timeout.command)
     }
 
     @Test
-    fun secondConnectToKnownRobotSkipsTheSettingsRead() = runTest {
-        val cache = InMemorySettingsCache()
+    fun theRobotsWorkRunsOffTheCallersThreadAndEndsWithTheCallersScope() = runTest {
         val peer = ScriptedRobot()
-        connect(peer, testOptions(cache = cache)).apply {
-            settings.linePid.kp.set(1.5f)
-            close()
+        lateinit var robot: Robot
+        // A scope that ends: the robot bound to it closes with it, and does not keep it from ending.
+        kotlinx.coroutines.coroutineScope {
+            robot = peer.device.connect(this + runtime(), testOptions())
+            assertEquals(ConnectionState.Connected, robot.connection.value)
         }
-        val again = connect(peer, testOptions(cache = cache))
-        assertEquals(1, peer.executed.count { it is ReadSettings }, "the second connect read the settings again")
-        assertEquals(1.5f, again.settings.linePid.kp.value)
-        again.close()
+        assertIs<ConnectionState.Closed>(robot.connection.value)
+        assertTrue(!peer.connected)
+    }
+
+    @Test
+    fun disconnectReturnsWhenEverythingTheRobotStartedHasEnded() = runTest {
+        val peer = ScriptedRobot()
+        val robot = connect(peer)
+        robot.disconnect()
+        assertIs<ConnectionState.Closed>(robot.connection.value)
+        assertTrue(!peer.connected)
     }
 
     @Test

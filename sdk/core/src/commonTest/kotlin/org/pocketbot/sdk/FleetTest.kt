@@ -18,7 +18,7 @@ class FleetTest {
         val discoverer = object : Discoverer {
             override fun discover(): Flow<RobotDevice> = peers.map { it.device }.asFlow()
         }
-        val fleet = Fleet(backgroundScope, testOptions())
+        val fleet = Fleet(robotScope(), testOptions())
         val robots = fleet.discoverAndConnect(discoverer)
         assertEquals(listOf(1, 2, 3), robots.map { it.identity.robotId }.sorted())
         assertEquals(3, fleet.robots.value.size)
@@ -40,7 +40,7 @@ class FleetTest {
     @Test
     fun enqueueTogetherSendsAllFramesBackToBack() = runTest {
         val peers = (1..4).map { ScriptedRobot(robotId = it) }
-        val fleet = Fleet(backgroundScope, testOptions())
+        val fleet = Fleet(robotScope(), testOptions())
         val robots = fleet.connectAll(peers.map { it.device })
         // Something already in flight on one robot must not hold the others back longer than itself.
         val before = peers.map { it.received.size }
@@ -52,7 +52,7 @@ class FleetTest {
     @Test
     fun aRobotThatRefusesDoesNotHoldTheOthersBack() = runTest {
         val peers = (1..3).map { ScriptedRobot(robotId = it) }
-        val fleet = Fleet(backgroundScope, testOptions())
+        val fleet = Fleet(robotScope(), testOptions())
         val robots = fleet.connectAll(peers.map { it.device })
         repeat(8) { robots[0].locomotion.enqueue(Movement.Straight(0.01, 0.1)) } // its queue is full
         val failure = runCatching { fleet.enqueueTogether(robots.associateWith { Movement.Straight(0.05, 0.1) }) }
@@ -65,7 +65,7 @@ class FleetTest {
     fun oneFailingConnectClosesTheOthers() = runTest {
         val good = ScriptedRobot(robotId = 1)
         val bad = ScriptedRobot(robotId = 2).apply { answersHello = false }
-        val fleet = Fleet(backgroundScope, testOptions())
+        val fleet = Fleet(robotScope(), testOptions())
         val failure = runCatching { fleet.connectAll(listOf(good.device, bad.device)) }.exceptionOrNull()
         assertIs<ConnectFailedException>(failure)
         assertTrue(fleet.robots.value.isEmpty())

@@ -13,7 +13,7 @@ import kotlin.test.assertTrue
 
 class OdometryTest {
     private var t = 0L
-    private fun ScriptedRobot.encoders(left: Int, right: Int) = sendState(EMPTY_STATE.copy(time = StateTime(++t, 0, 0), encoders = StateEncoders(left, right)))
+    private fun ScriptedRobot.encoders(left: Int, right: Int) = sendState(EMPTY_STATE.with(time = StateTime(++t, 0, 0, 0), encoders = StateEncoders(left, right)))
 
     // Defaults: wheel 9 mm, base 26 mm, 40 pulses per revolution, as float32 (as the robot holds them).
     private val diameter = Float.fromBits(0.009f.toRawBits()).toDouble()
@@ -50,6 +50,55 @@ class OdometryTest {
         robot.state.first { it.time.timeMs == t }
         val pose = robot.odometry.pose.value
         assertTrue(abs(pose.headingRad - expected) < 1e-12, "heading ${pose.headingRad} != $expected")
+        robot.close()
+    }
+
+    @Test
+    fun headingAfterManyTurnsThereAndBackIsExactlyZero() = runTest {
+        val peer = ScriptedRobot()
+        val robot = connect(peer)
+        peer.encoders(0, 0)
+        // Hundreds of turns in place and back in small steps: a sum of heading increments collects rounding
+        // error at every step (the heading grows to thousands of radians), the total-count formula has none.
+        var l = 0
+        var r = 0
+        val steps = 20_000
+        repeat(steps) { l -= 7; r += 7; peer.encoders(l, r) }
+        repeat(steps) { l += 7; r -= 7; peer.encoders(l, r) }
+        robot.state.first { it.time.timeMs == t }
+        assertEquals(0.0, robot.odometry.pose.value.headingRad, "heading after returning to the start counts")
+        robot.close()
+    }
+
+    @Test
+    fun wheelDistancesAreInMetresFromTheRobotsGeometry() = runTest {
+        val peer = ScriptedRobot()
+        val robot = connect(peer)
+        peer.encoders(500, 500)
+        peer.encoders(540, 520)
+        robot.state.first { it.time.timeMs == t }
+        val w = robot.odometry.wheelDistances.value
+        assertEquals(40 * perPulse, w.leftM, 1e-12)
+        assertEquals(20 * perPulse, w.rightM, 1e-12)
+        assertEquals(30 * perPulse, w.travelledM, 1e-12)
+        robot.close()
+    }
+
+    @Test
+    fun aRobotResetKeepsThePoseAndCountsOnFromItsNewZero() = runTest {
+        val peer = ScriptedRobot()
+        val robot = connect(peer)
+        peer.encoders(0, 0)
+        peer.encoders(100, 100)
+        robot.state.first { it.time.timeMs == t }
+        val before = robot.odometry.pose.value
+        // The robot resets: its clock and its counts start again.
+        t = 0
+        peer.encoders(0, 0)
+        peer.encoders(40, 40)
+        val after = robot.odometry.pose.first { it.xM > before.xM }
+        assertEquals(before.xM + 40 * perPulse, after.xM, 1e-9)
+        assertEquals(140 * perPulse, robot.odometry.wheelDistances.value.leftM, 1e-9)
         robot.close()
     }
 

@@ -28,11 +28,11 @@ class ProximityTest {
         val robot = connect(peer)
         val got = async { robot.proximity.encounters.take(2).toList() }
         runCurrent()
-        val nobody = ProximitySide(0, 0, 0, 0)
-        fun state(t: Long, front: ProximitySide) = EMPTY_STATE.copy(time = StateTime(t, 0, 0), proximity = StateProximity(front, nobody))
-        peer.sendState(state(1, ProximitySide(2, 3, IrLed.REAR.code, DistanceClass.FAR.code)))
-        peer.sendState(state(2, ProximitySide(2, 3, IrLed.REAR.code, DistanceClass.FAR.code))) // unchanged
-        peer.sendState(state(3, ProximitySide(3, 3, IrLed.REAR.code, DistanceClass.NEAR.code))) // closer, obstacle too
+        val nobody = ProximitySide(0, 0, IrLed.FRONT, DistanceClass.NONE)
+        fun state(t: Long, front: ProximitySide) = EMPTY_STATE.with(time = StateTime(t, 0, 0, 0), proximity = StateProximity(front, nobody))
+        peer.sendState(state(1, ProximitySide(2, 3, IrLed.REAR, DistanceClass.FAR)))
+        peer.sendState(state(2, ProximitySide(2, 3, IrLed.REAR, DistanceClass.FAR))) // unchanged
+        peer.sendState(state(3, ProximitySide(3, 3, IrLed.REAR, DistanceClass.NEAR))) // closer, obstacle too
         val encounters = got.await()
         assertEquals(Encounter(3, Side.FRONT, IrLed.REAR, DistanceClass.FAR, 1), encounters[0])
         assertEquals(Encounter(3, Side.FRONT, IrLed.REAR, DistanceClass.NEAR, 3), encounters[1])

@@ -26,7 +26,7 @@ class ReflectionTest {
     fun fullStateIsVisibleWithItsRobotTime() = runTest {
         val peer = ScriptedRobot()
         val robot = connect(peer)
-        val s = EMPTY_STATE.copy(time = StateTime(1234, 0, 0), encoders = StateEncoders(10, 20))
+        val s = EMPTY_STATE.with(time = StateTime(1234, 0, 0, 0), encoders = StateEncoders(10, 20))
         peer.sendState(s)
         val seen = robot.state.first { it.time.timeMs == 1234L }
         assertEquals(StateEncoders(10, 20), seen.encoders)
@@ -38,7 +38,7 @@ class ReflectionTest {
     fun reducedStateUpdatesOnlyItsPart() = runTest {
         val peer = ScriptedRobot()
         val robot = connect(peer)
-        val full = EMPTY_STATE.copy(time = StateTime(100, 0, 0), power = EMPTY_STATE.power.copy(batteryMv = 3700))
+        val full = EMPTY_STATE.with(time = StateTime(100, 0, 0, 0), power = org.pocketbot.protocol.StatePower(3700, 0, 0))
         peer.sendState(full)
         robot.state.first { it.time.timeMs == 100L }
         peer.sendReduced(StateReduced(105, 3, 4, 50, 60, -200, 1))
@@ -59,8 +59,8 @@ class ReflectionTest {
         val kinds = mutableListOf<StateUpdate.Kind>()
         val job = launch { robot.stateUpdates.collect { kinds += it.kind } }
         runCurrent()
-        peer.sendState(EMPTY_STATE.copy(time = StateTime(1, 0, 0)))
-        peer.sendState(EMPTY_STATE.copy(time = StateTime(1, 0, 0))) // identical: a StateFlow would drop it
+        peer.sendState(EMPTY_STATE.with(time = StateTime(1, 0, 0, 0)))
+        peer.sendState(EMPTY_STATE.with(time = StateTime(1, 0, 0, 0))) // identical: a StateFlow would drop it
         peer.sendReduced(StateReduced(2, 0, 0, 0, 0, 0, 0))
         robot.state.first { it.time.timeMs == 2L }
         runCurrent()
@@ -73,12 +73,12 @@ class ReflectionTest {
     fun corruptTruncatedAndUnknownFramesAreCountedAndNeverApplied() = runTest {
         val peer = ScriptedRobot()
         val robot = connect(peer)
-        val good = Frames.encode(StateFull(EMPTY_STATE.copy(time = StateTime(77, 0, 0))), 0)
+        val good = Frames.encode(StateFull(EMPTY_STATE.with(time = StateTime(77, 0, 0, 0))), 0)
         peer.sendRaw(good.copyOf().also { it[10] = (it[10] + 1).toByte() })         // bit error
         peer.sendRaw(good.copyOf(good.size - 7))                                      // truncated
         peer.sendRaw(byteArrayOf(0x7F, 0, 0) + crcOf(byteArrayOf(0x7F, 0, 0)))          // unknown type
         peer.sendRaw(byteArrayOf(1))                                                    // too short
-        peer.sendState(EMPTY_STATE.copy(time = StateTime(78, 0, 0)))
+        peer.sendState(EMPTY_STATE.with(time = StateTime(78, 0, 0, 0)))
         robot.state.first { it.time.timeMs == 78L }
         val stats = robot.linkStats.value
         assertEquals(1, stats.badCrc)
@@ -99,7 +99,7 @@ class ReflectionTest {
         assertEquals(2, peer.syncMode)
         assertEquals(5, peer.syncPeriodMs)
         assertEquals(SyncMode.REDUCED, robot.reflector.mode.value)
-        assertEquals(2, robot.settings.sync.mode.value)
+        assertEquals(SyncMode.REDUCED, robot.settings.sync.mode.value)
         assertEquals(5, robot.settings.sync.periodMs.value)
         assertEquals(SetSync(2, 5), peer.executed.last())
         robot.close()

@@ -14,7 +14,12 @@ import org.pocketbot.protocol.LoadDefaults
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
+import org.pocketbot.protocol.Crc16
 import org.pocketbot.protocol.MovementDone
+import org.pocketbot.protocol.MovementLog
+import org.pocketbot.protocol.MovementOutcome
+import org.pocketbot.protocol.ReadMovements
+import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.ProtocolInfo
@@ -31,23 +36,32 @@ import org.pocketbot.protocol.UpdateSettings
 import org.pocketbot.sdk.internal.DEFAULT_SETTINGS_BYTES
 import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.readNumber
+import org.pocketbot.sdk.transport.LinkRate
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.Transport
 import org.pocketbot.sdk.transport.TransportLostException
 
 /**
- * An in-memory robot that speaks the protocol like the firmware: hello, acks with a retransmission history,
- * read/update settings with the firmware's bounds checks, a movement queue. Tests script what it sends (states,
- * movement completions) and inject faults (lost frames in either direction, corruption, disconnects).
- * Everything runs synchronously inside [Transport.send], so tests are deterministic.
+ * An in-memory robot that speaks the protocol like the firmware: hello with host sessions, acks with a
+ * retransmission history (same session, same bytes), read/update settings with the firmware's bounds checks, a
+ * movement queue with results and a log. Tests script what it sends (states, movement ends) and inject faults (lost
+ * frames in either direction, disconnects, resets). Everything runs synchronously inside [Transport.send], so tests
+ * are deterministic.
  */
 class ScriptedRobot(
     var robotId: Int = 7,
+    val address: String = "scripted:$robotId",
     var name: String = "Scripted",
     var protocolVersion: Int = ProtocolInfo.VERSION,
     var layoutHash: Long = ProtocolInfo.LAYOUT_HASH,
 ) {
-    val settings: ByteArray = DEFAULT_SETTINGS_BYTES.copyOf().also { it[0] = robotId.toByte() }
+    val settings: ByteArray = DEFAULT_SETTINGS_BYTES.copyOf().also { it[offsetOf("identity.robot_id")] = robotId.toByte() }
+
+    /** Writes [value] into the robot's own settings behind the host's back (another host, the EEPROM at a reset). */
+    fun poke(name: String, value: Number) {
+        val f = SETTINGS_FIELDS.single { it.path == name }
+        org.pocketbot.sdk.internal.writeNumber(settings, f.offset, f.type, value, name)
+    }
     var state: RobotState = EMPTY_STATE
 
     /** Every valid frame the host sent, in order: (seq, packet). */
@@ -58,6 +72,12 @@ class ScriptedRobot(
 
     val queue = ArrayDeque<Int>()
     var finishedId = 0
+
+    /** Movement results, oldest first, as the firmware's log keeps them (the last 16). */
+    val log = ArrayDeque<Triple<Int, MovementOutcome, Float>>()
+
+    /** The host session the robot serves; 0 after a reset. */
+    var session = 0L
     var syncMode = 1
     var syncPeriodMs = 100
 
@@ -70,18 +90,30 @@ class ScriptedRobot(
     /** When set, decides per outgoing packet whether to drop it. */
     var dropOutgoingIf: ((Packet) -> Boolean)? = null
 
+    /** When set, decides per outgoing packet whether it arrives garbled (a bad CRC), as a noisy link delivers it. */
+    var garbleOutgoingIf: ((Packet) -> Boolean)? = null
+
     /** Refuse this many [RobotDevice.open] calls. */
     var refuseOpens = 0
 
+    /** Commands the robot swallows without an answer (a broken firmware). */
+    var refuseToAck: ((Packet) -> Boolean)? = null
+
+    /** Says hello without being asked (sequence 0), as at a reset, but keeps everything (a glitching robot). */
+    fun sayHelloUnasked() = send(hello(resumed = false))
+
     /** Answer hello requests at all. */
     var answersHello = true
+
+    /** How fast the link to this robot is, as its device says. */
+    var linkRate: LinkRate = LinkRate.SERIAL_115200
     var opens = 0
-    private val history = ArrayDeque<Pair<Int, Int>>()
+    private val history = ArrayDeque<Pair<Int, List<Byte>>>()
     private var link: Link? = null
 
     inner class Link : Transport {
         val channel = Channel<ByteArray>(Channel.UNLIMITED)
-        override val address: String = "scripted:$robotId"
+        override val address: String = this@ScriptedRobot.address
         override val incoming: ReceiveChannel<ByteArray> get() = channel
         var open = true
 
@@ -98,7 +130,8 @@ class ScriptedRobot(
 
     val device: RobotDevice = object : RobotDevice {
         override val name: String get() = this@ScriptedRobot.name
-        override val address: String get() = "scripted:$robotId"
+        override val address: String get() = this@ScriptedRobot.address
+        override val linkRate: LinkRate get() = this@ScriptedRobot.linkRate
         override suspend fun open(): Transport {
             opens++
             if (refuseOpens > 0) {
@@ -131,7 +164,9 @@ class ScriptedRobot(
             return
         }
         if (dropOutgoingIf?.invoke(packet) == true) return
-        l.channel.trySend(Frames.encode(packet, seq))
+        val frame = Frames.encode(packet, seq)
+        if (garbleOutgoingIf?.invoke(packet) == true) frame[frame.size - 1] = (frame[frame.size - 1].toInt() xor 0x5A).toByte()
+        l.channel.trySend(frame)
     }
 
     fun sendState(s: RobotState = state) {
@@ -141,15 +176,69 @@ class ScriptedRobot(
 
     fun sendReduced(r: StateReduced) = send(StateReduced(r.timeMs, r.encoderLeft, r.encoderRight, r.speedLeftMmps, r.speedRightMmps, r.linePosition, r.lineFlags))
 
-    /** The running movement finishes: movement_done and the state say so. */
-    fun finishMovement(announce: Boolean = true) {
+    /** The running movement ends ([outcome], [done] of it): the log, the state and (if [announce]) movement_done say so. */
+    fun finishMovement(announce: Boolean = true, outcome: MovementOutcome = MovementOutcome.FINISHED, done: Float = 0.1f) {
         val id = queue.removeFirst()
-        finishedId = id
-        state = state.copy(locomotion = state.locomotion.copy(finishedId = id, currentId = queue.firstOrNull() ?: 0, queueLength = queue.size))
-        if (announce) send(MovementDone(id))
+        if (outcome == MovementOutcome.FINISHED) finishedId = id
+        record(id, outcome, done, announce)
+        updateLocomotion()
     }
 
-    private fun hello() = Hello(robotId, name, 0, 1, 0, protocolVersion, layoutHash, ProtocolInfo.SETTINGS_SIZE, ProtocolInfo.STATE_SIZE)
+    private fun record(id: Int, outcome: MovementOutcome, done: Float, announce: Boolean) {
+        log.addLast(Triple(id, outcome, done))
+        if (log.size > 16) log.removeFirst()
+        if (announce) send(MovementDone(id, outcome.code, done))
+    }
+
+    /** The queue is cleared by [outcome]: the running movement gets [doneRunning], the rest nothing. */
+    fun clearQueue(outcome: MovementOutcome, doneRunning: Float = 0.05f, announce: Boolean = true) {
+        var first = true
+        while (queue.isNotEmpty()) {
+            val id = queue.removeFirst()
+            val o = if (first) outcome else if (outcome == MovementOutcome.FAILSAFE) outcome else MovementOutcome.DROPPED
+            record(id, o, if (first) doneRunning else 0f, announce)
+            first = false
+        }
+        updateLocomotion()
+    }
+
+    /** Power cycle: queue, log, session and history are gone; the robot says hello unasked. */
+    fun reset() {
+        queue.clear()
+        log.clear()
+        history.clear()
+        session = 0
+        finishedId = 0
+        state = EMPTY_STATE
+        send(hello(resumed = false))
+    }
+
+    private fun updateLocomotion() {
+        state = RobotState(
+            time = state.time, encoders = state.encoders, wheels = state.wheels, line = state.line,
+            lineFollow = state.lineFollow, proximity = state.proximity, colour = state.colour, accel = state.accel,
+            power = state.power, indicators = state.indicators,
+            locomotion = StateLocomotion(
+                mode = if (queue.isEmpty()) org.pocketbot.protocol.LocoMode.IDLE else org.pocketbot.protocol.LocoMode.MOVEMENT, queueLength = queue.size, currentId = queue.firstOrNull() ?: 0, finishedId = finishedId,
+            ),
+            track = state.track, errors = state.errors,
+        )
+    }
+
+    private fun hello(resumed: Boolean) = Hello(
+        robotId, name, 0, 1, 0, protocolVersion, layoutHash, ProtocolInfo.SETTINGS_SIZE, ProtocolInfo.STATE_SIZE,
+        if (resumed) 1 else 0, Crc16.compute(settings),
+    )
+
+    private fun movementLog(): MovementLog {
+        val entries = log.toList()
+        return MovementLog(
+            queue.firstOrNull() ?: 0, queue.size, entries.size,
+            List(16) { entries.getOrNull(it)?.first ?: 0 },
+            List(16) { entries.getOrNull(it)?.second?.code ?: 0 },
+            List(16) { entries.getOrNull(it)?.third ?: 0f },
+        )
+    }
 
     private fun onFrame(frame: ByteArray) {
         if (dropIncoming > 0) {
@@ -161,11 +250,16 @@ class ScriptedRobot(
         received += seq to packet
         val spec = PACKET_SPECS.getValue(packet.type)
         if (packet is HelloRequest) {
-            if (answersHello) send(hello())
+            val resumed = packet.session != 0L && packet.session == session
+            if (!resumed) history.clear()
+            session = packet.session
+            if (answersHello) send(hello(resumed), seq)
             return
         }
         if (!spec.acked) return
-        if (packet !is ReadSettings && history.contains(seq to packet.type)) {
+        if (refuseToAck?.invoke(packet) == true) return
+        val content = frame.toList()
+        if (packet !is ReadSettings && packet !is ReadMovements && history.contains(seq to content)) {
             send(Ack(packet.type), seq)
             return
         }
@@ -175,8 +269,9 @@ class ScriptedRobot(
             return
         }
         executed += packet
-        history.addLast(seq to packet.type)
+        history.addLast(seq to content)
         if (history.size > 8) history.removeFirst()
+        if (packet is ReadMovements) send(movementLog())
         if (packet is ReadSettings) {
             var offset = 0
             while (offset < settings.size) {
@@ -194,7 +289,7 @@ class ScriptedRobot(
             is UpdateSettings -> {
                 val start = SETTINGS_FIELDS.firstOrNull { it.offset == packet.offset } ?: return ErrorCode.SETTINGS_RANGE to packet.offset
                 val end = packet.offset + packet.data.size
-                if (SETTINGS_FIELDS.none { it.offset + it.size == end }) return ErrorCode.SETTINGS_RANGE to packet.data.size
+                if (SETTINGS_FIELDS.none { it.offset + it.size == end }) return ErrorCode.SETTINGS_RANGE to packet.offset
                 val candidate = settings.copyOf()
                 packet.data.copyInto(candidate, packet.offset)
                 for (f in SETTINGS_FIELDS.filter { it.offset >= start.offset && it.offset < end }) {
@@ -212,11 +307,14 @@ class ScriptedRobot(
                 if (packet.mode > 2 || packet.periodMs == 0) return ErrorCode.BAD_ARGUMENT to packet.mode
                 syncMode = packet.mode
                 syncPeriodMs = packet.periodMs
+                // The firmware keeps the sync mode in its settings too.
+                poke("sync.mode", packet.mode)
+                poke("sync.period_ms", packet.periodMs)
             }
             is MoveStraight -> return enqueue(packet.id)
             is MoveRotate -> return enqueue(packet.id)
             is MoveArc -> return enqueue(packet.id)
-            is Stop -> queue.clear()
+            is Stop -> clearQueue(MovementOutcome.STOPPED)
             is LoadDefaults -> DEFAULT_SETTINGS_BYTES.copyInto(settings)
             is SaveSettings, is ReadSettings -> {}
             else -> {}
@@ -227,7 +325,7 @@ class ScriptedRobot(
     private fun enqueue(id: Int): Pair<ErrorCode, Int>? {
         if (queue.size >= 8) return ErrorCode.QUEUE_FULL to queue.size
         queue.addLast(id)
-        state = state.copy(locomotion = state.locomotion.copy(mode = 1, currentId = queue.first(), queueLength = queue.size))
+        updateLocomotion()
         return null
     }
 }

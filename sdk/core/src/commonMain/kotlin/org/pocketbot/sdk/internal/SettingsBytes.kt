@@ -1,6 +1,5 @@
 package org.pocketbot.sdk.internal
 
-import org.pocketbot.protocol.LengthMismatch
 import org.pocketbot.protocol.FieldType
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.SETTINGS_DEFAULTS
@@ -10,7 +9,7 @@ import org.pocketbot.protocol.SettingsFieldInfo
 internal fun Settings.toBytes(): ByteArray = ByteArray(ProtocolInfo.SETTINGS_SIZE).also { encodeTo(it, 0) }
 
 internal fun settingsOf(bytes: ByteArray): Settings {
-    if (bytes.size < ProtocolInfo.SETTINGS_SIZE) throw LengthMismatch(ProtocolInfo.SETTINGS_SIZE, bytes.size)
+    require(bytes.size >= ProtocolInfo.SETTINGS_SIZE) { "settings need ${ProtocolInfo.SETTINGS_SIZE} bytes, not ${bytes.size}" }
     return Settings.decode(bytes, 0)
 }
 

@@ -35,7 +35,7 @@ import org.pocketbot.protocol.SlipDecoder
  *   [incoming] in order. When [incoming] is full the reader waits, so a slow consumer slows the link down
  *   instead of losing frames.
  * - Broken SLIP (an invalid escape, a frame longer than `maxFrame`) drops that frame and counts it in
- *   [framingErrors]; the stream goes on at the next END byte. Frame contents are not checked here: that is
+ *   [droppedFrames]; the stream goes on at the next END byte. Frame contents are not checked here: that is
  *   [Frames.decode]'s job.
  * - When the stream ends or fails (the robot switched off, the socket or tty went away), the link is lost:
  *   [incoming] is closed with a [TransportLostException], the stream is closed and [send] throws
@@ -45,7 +45,7 @@ import org.pocketbot.protocol.SlipDecoder
  *
  * ```
  * val transport = SlipStreamTransport("pipe:test", myByteStream)
- * transport.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq = 1))
+ * transport.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, session), seq = 1))
  * val reply = Frames.decode(transport.incoming.receive())
  * transport.close()
  * ```
@@ -66,8 +66,8 @@ public open class SlipStreamTransport(
     incomingCapacity: Int = DEFAULT_INCOMING_CAPACITY,
 ) : Transport {
     private val frames = Channel<ByteArray>(incomingCapacity)
-    private val framingErrorCount = MutableStateFlow(0L)
-    private val lastError = MutableStateFlow<ProtocolError.Framing?>(null)
+    private val drops = MutableStateFlow(DroppedFrames())
+    private val lastError = MutableStateFlow<ProtocolError?>(null)
     private val writeLock = Mutex()
 
     /** null while open, then [CLOSED] or the [TransportLostException] that ended the link. */
@@ -76,11 +76,11 @@ public open class SlipStreamTransport(
 
     final override val incoming: ReceiveChannel<ByteArray> get() = frames
 
-    /** How many frames were dropped because their SLIP framing was broken, since the transport was opened. */
-    public val framingErrors: StateFlow<Long> = framingErrorCount.asStateFlow()
+    /** Frames the SLIP decoder dropped (broken framing, longer than `maxFrame`), since the transport was opened. */
+    final override val droppedFrames: StateFlow<DroppedFrames> = drops.asStateFlow()
 
     /** Why the latest frame was dropped by the SLIP decoder, or null while none was. */
-    public val lastFramingError: StateFlow<ProtocolError.Framing?> = lastError.asStateFlow()
+    public val lastFramingError: StateFlow<ProtocolError?> = lastError.asStateFlow()
 
     /** True until [close] is called or the link is lost. */
     public val isOpen: Boolean get() = ending.load() == null
@@ -114,8 +114,10 @@ public open class SlipStreamTransport(
         }
     }
 
-    private fun countFramingError(error: ProtocolError.Framing) {
-        framingErrorCount.update { it + 1 }
+    private fun countFramingError(error: ProtocolError) {
+        drops.update {
+            if (error is ProtocolError.TooLong) DroppedFrames(it.tooLong + 1, it.badFraming) else DroppedFrames(it.tooLong, it.badFraming + 1)
+        }
         lastError.value = error
     }
 

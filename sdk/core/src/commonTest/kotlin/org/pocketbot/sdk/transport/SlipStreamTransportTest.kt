@@ -27,7 +27,7 @@ import org.pocketbot.protocol.SlipDecoder
 @OptIn(ExperimentalCoroutinesApi::class)
 class SlipStreamTransportTest {
     private val hello = Hello(3, "PocketBot-3", 0, 1, 0, ProtocolInfo.VERSION, ProtocolInfo.LAYOUT_HASH,
-        ProtocolInfo.SETTINGS_SIZE, ProtocolInfo.STATE_SIZE)
+        ProtocolInfo.SETTINGS_SIZE, ProtocolInfo.STATE_SIZE, 0, 0x1234)
     private val helloFrame = Frames.encode(hello, seq = 7)
 
     /** A frame whose payload holds both SLIP special bytes, so escaping is exercised. */
@@ -51,10 +51,10 @@ class SlipStreamTransportTest {
     fun framesMergedIntoOneChunkArriveInOrder() = runTest {
         val pipe = MemoryPipe()
         val t = transport(pipe)
-        val frames = (0 until 5).map { Frames.encode(HelloRequest(it), seq = it) } + listOf(trickyFrame)
+        val frames = (0 until 5).map { Frames.encode(HelloRequest(it, 1L), seq = it) } + listOf(trickyFrame)
         pipe.robotSends(frames.map { Slip.encode(it) }.reduce { a, b -> a + b })
         for (expected in frames) assertContentEquals(expected, t.incoming.receive())
-        assertEquals(0L, t.framingErrors.value)
+        assertEquals(0L, t.droppedFrames.value.total)
         t.close()
     }
 
@@ -85,7 +85,7 @@ class SlipStreamTransportTest {
         assertContentEquals(helloFrame, t.incoming.receive())
         assertContentEquals(trickyFrame, t.incoming.receive())
         assertContentEquals(helloFrame, t.incoming.receive())
-        assertEquals(2L, t.framingErrors.value)
+        assertEquals(DroppedFrames(badFraming = 2), t.droppedFrames.value)
         assertTrue(t.lastFramingError.value!!.message.contains("escape"), "${t.lastFramingError.value}")
         t.close()
     }
@@ -102,7 +102,7 @@ class SlipStreamTransportTest {
         assertContentEquals(noise, junk)
         assertIs<FrameResult.Failed>(Frames.decode(junk))
         assertContentEquals(helloFrame, t.incoming.receive())
-        assertEquals(0L, t.framingErrors.value)
+        assertEquals(0L, t.droppedFrames.value.total)
         t.close()
     }
 
@@ -110,11 +110,11 @@ class SlipStreamTransportTest {
     fun aFrameLongerThanTheLimitIsDroppedAndTheNextOneArrives() = runTest {
         val pipe = MemoryPipe()
         val t = transport(pipe, maxFrame = 16)
-        val small = Frames.encode(HelloRequest(1), seq = 1)
+        val small = Frames.encode(HelloRequest(1, 1L), seq = 1)
         pipe.robotSends(Slip.encode(ByteArray(40) { it.toByte() }), Slip.encode(small))
         val frame = t.incoming.receive()
         assertContentEquals(small, frame)
-        assertEquals(1L, t.framingErrors.value)
+        assertEquals(DroppedFrames(tooLong = 1), t.droppedFrames.value)
         t.close()
     }
 
@@ -136,7 +136,7 @@ class SlipStreamTransportTest {
     fun concurrentSendsDoNotInterleave() = runTest {
         val pipe = MemoryPipe()
         val t = transport(pipe)
-        val frames = (0 until 50).map { Frames.encode(HelloRequest(it), seq = it) }
+        val frames = (0 until 50).map { Frames.encode(HelloRequest(it, 1L), seq = it) }
         frames.map { f -> async { t.send(f) } }.awaitAll()
         val received = mutableListOf<ByteArray>()
         SlipDecoder().feed(pipe.hostBytes()) { received += it }

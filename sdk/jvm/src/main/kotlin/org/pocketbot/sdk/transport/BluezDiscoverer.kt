@@ -181,14 +181,22 @@ public class BluezDiscoverer(
  * @property paired whether the device is paired with this adapter.
  * @property rssi the received signal strength of the latest inquiry result, in dBm, or null.
  */
-public data class BluetoothDeviceInfo(
-    val objectPath: String,
-    val address: String,
-    val name: String?,
-    val uuids: List<String>,
-    val paired: Boolean,
-    val rssi: Int?,
-)
+public class BluetoothDeviceInfo internal constructor(
+    public val objectPath: String,
+    public val address: String,
+    public val name: String?,
+    public val uuids: List<String>,
+    public val paired: Boolean,
+    public val rssi: Int?,
+) {
+    // Not a data class: a property BlueZ offers later can be added without breaking callers (no componentN, no copy).
+    override fun equals(other: Any?): Boolean = other is BluetoothDeviceInfo && objectPath == other.objectPath &&
+        address == other.address && name == other.name && uuids == other.uuids && paired == other.paired && rssi == other.rssi
+
+    override fun hashCode(): Int = listOf(objectPath, address, name, uuids, paired, rssi).hashCode()
+
+    override fun toString(): String = "BluetoothDeviceInfo($address, name=$name, paired=$paired, rssi=$rssi, $objectPath)"
+}
 
 /**
  * A robot found over Bluetooth (see [BluezDiscoverer]); [open] connects through the RFCOMM tty bound to its

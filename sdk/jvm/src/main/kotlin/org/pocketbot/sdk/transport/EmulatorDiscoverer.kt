@@ -13,8 +13,11 @@ import kotlinx.coroutines.runInterruptible
 /**
  * Finds the robots of an emulator running as its own process (`make emulator`, or the emulator's `main`) through
  * its control port: a TCP port on which the emulator answers every connection with one line per robot,
- * `<id>\t<name>\t<tcp port>\n` (ASCII), then closes it (see emulator/README.md). Each robot becomes a
- * [TcpRobotDevice] at [host] and its port.
+ * `<id>\t<name>\t<tcp port>\t<host>\n` (ASCII; older emulators leave `host` out), then closes it (see
+ * emulator/README.md). Each robot becomes a [TcpRobotDevice] at [host] and its port: the host this discoverer reached
+ * the control port at, where the robots listen too. The line's `host` (the address the emulator saw the connection
+ * arrive at) is not used, because behind port forwarding (an Android emulator's `10.0.2.2`, `adb reverse`) it is not
+ * an address the client can reach.
  *
  * [discover] asks once and completes; it throws [TransportLostException] when no emulator answers at
  * [host]:[controlPort] within [timeout]. Robots without a TCP endpoint (port `-1`) and lines it cannot read are

@@ -19,6 +19,9 @@ public class SerialRobotDevice(
 ) : RobotDevice {
     override val address: String = SerialTransport.serialAddress(path)
 
+    /** [baud] with 8N1 framing (an RFCOMM tty carries what the robot's Bluetooth module bridges: 115200 Bd). */
+    override val linkRate: LinkRate get() = LinkRate.ofBaud(baud)
+
     /** Opens the port; throws [TransportLostException] when it cannot. Safe from any coroutine. */
     override suspend fun open(): Transport = SerialTransport.open(path, baud)
 

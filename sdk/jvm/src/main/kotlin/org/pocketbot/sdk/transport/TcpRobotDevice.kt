@@ -1,5 +1,7 @@
 package org.pocketbot.sdk.transport
 
+import kotlinx.coroutines.CoroutineDispatcher
+import org.pocketbot.sdk.transport.internal.SocketLoop
 import kotlin.time.Duration
 
 /**
@@ -25,8 +27,13 @@ public class TcpRobotDevice(
 
     override val address: String = TcpTransport.tcpAddress(host, port)
 
+    private val loop = SocketLoop.next()
+
+    /** The event loop that serves this robot's socket (one of a few, taken in turn): its link runs there too. */
+    override val eventLoop: CoroutineDispatcher get() = loop
+
     /** Connects; throws [TransportLostException] when nothing answers at [address]. Safe from any coroutine. */
-    override suspend fun open(): Transport = TcpTransport.connect(host, port, connectTimeout)
+    override suspend fun open(): Transport = TcpTransport.connect(host, port, connectTimeout, loop = loop)
 
     override fun toString(): String = "$name ($address)"
     override fun equals(other: Any?): Boolean =

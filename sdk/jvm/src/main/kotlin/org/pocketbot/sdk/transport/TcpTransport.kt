@@ -1,33 +1,32 @@
 package org.pocketbot.sdk.transport
 
-import io.ktor.network.selector.SelectorManager
-import io.ktor.network.sockets.Socket
-import io.ktor.network.sockets.aSocket
-import io.ktor.network.sockets.openReadChannel
-import io.ktor.network.sockets.openWriteChannel
-import io.ktor.utils.io.ByteReadChannel
-import io.ktor.utils.io.ByteWriteChannel
-import io.ktor.utils.io.readAvailable
-import io.ktor.utils.io.writeFully
-import kotlin.coroutines.CoroutineContext
-import kotlin.time.Duration
-import kotlin.time.Duration.Companion.seconds
 import kotlinx.coroutines.CancellationException
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.TimeoutCancellationException
 import kotlinx.coroutines.withTimeout
+import org.pocketbot.sdk.transport.internal.SocketLoop
+import java.net.InetSocketAddress
+import java.net.StandardSocketOptions
+import java.nio.ByteBuffer
+import java.nio.channels.SelectionKey
+import java.nio.channels.SocketChannel
+import kotlin.coroutines.CoroutineContext
+import kotlin.time.Duration
+import kotlin.time.Duration.Companion.seconds
 
 /**
  * A [Transport] over TCP: SLIP frames on a socket, as the emulator's robot endpoints and any robot bridged to
- * TCP (a serial-to-TCP server, `socat`, an ESP32 bridge) speak. Built on ktor-network's non-blocking sockets;
- * the socket has `TCP_NODELAY` set, so a frame leaves as soon as it is sent.
+ * TCP (a serial-to-TCP server, `socat`, an ESP32 bridge) speak. Non-blocking NIO sockets share a few event-loop
+ * threads, and by default each socket is read and its frames decoded right on its loop; a robot
+ * connected through a [TcpRobotDevice] runs its link on that loop too, so a frame reaches the robot's state without
+ * a thread hand-over. The socket has `TCP_NODELAY` set, so a frame leaves as soon as it is sent.
  *
  * Everything else (framing errors, lost link, [close]) is [SlipStreamTransport]'s behaviour. Safe to use from any
  * thread and coroutine.
  *
  * ```
  * val transport = TcpTransport.connect("127.0.0.1", 40001)
- * transport.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq = 0))
+ * transport.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, session), seq = 0))
  * println(Frames.decode(transport.incoming.receive()))
  * transport.close()
  * ```
@@ -52,51 +51,75 @@ public class TcpTransport private constructor(
             host: String,
             port: Int,
             timeout: Duration = DEFAULT_CONNECT_TIMEOUT,
-            context: CoroutineContext = Dispatchers.IO,
+            context: CoroutineContext = Dispatchers.Unconfined,
+        ): TcpTransport = connect(host, port, timeout, context, SocketLoop.next())
+
+        /** [connect] with its socket served by [loop]. */
+        internal suspend fun connect(
+            host: String,
+            port: Int,
+            timeout: Duration,
+            context: CoroutineContext = Dispatchers.Unconfined,
+            loop: SocketLoop,
         ): TcpTransport {
             require(port in 1..65535) { "port $port is not a TCP port" }
             val address = tcpAddress(host, port)
-            val socket = try {
+            val channel = SocketChannel.open()
+            try {
+                channel.configureBlocking(false)
+                channel.setOption(StandardSocketOptions.TCP_NODELAY, true)
+                channel.setOption(StandardSocketOptions.SO_KEEPALIVE, true)
                 withTimeout(timeout) {
-                    aSocket(selector).tcp().connect(host, port) {
-                        noDelay = true
-                        keepAlive = true
+                    if (!channel.connect(InetSocketAddress(host, port))) {
+                        while (!channel.finishConnect()) loop.await(channel, SelectionKey.OP_CONNECT)
                     }
                 }
             } catch (e: TimeoutCancellationException) {
+                channel.close()
                 throw TransportLostException("$address: no connection within $timeout", e)
             } catch (e: CancellationException) {
+                channel.close()
                 throw e
             } catch (e: Exception) {
+                channel.close()
                 throw TransportLostException("$address: cannot connect: ${e.message ?: e::class.simpleName}", e)
             }
-            return TcpTransport(address, SocketStream(socket), context)
+            return TcpTransport(address, SocketStream(channel, loop), context)
         }
-
-        /** One selector for every TCP transport of the process: its coroutine runs on [Dispatchers.IO]. */
-        private val selector: SelectorManager by lazy { SelectorManager(Dispatchers.IO) }
 
         internal fun tcpAddress(host: String, port: Int): String =
             if (':' in host) "tcp://[$host]:$port" else "tcp://$host:$port"
     }
 }
 
-/** A ktor socket as a [ByteStream]. */
-private class SocketStream(private val socket: Socket) : ByteStream {
-    private val input: ByteReadChannel = socket.openReadChannel()
-    private val output: ByteWriteChannel = socket.openWriteChannel(autoFlush = false)
+/** A non-blocking socket as a [ByteStream]: reads and writes that would block wait on its [loop]. */
+private class SocketStream(private val channel: SocketChannel, private val loop: SocketLoop) : ByteStream {
+    /** The last read left room in the buffer: the socket is most likely empty, so wait before reading again. */
+    private var drained = false
 
     override suspend fun read(buffer: ByteArray, offset: Int, length: Int): Int {
-        val n = input.readAvailable(buffer, offset, length)
-        return if (n == 0 && input.isClosedForRead) -1 else n
+        val into = ByteBuffer.wrap(buffer, offset, length)
+        // Waiting first after a short read saves the read that would only say "nothing yet" (one system call per
+        // frame at a robot's pace); readiness is level-triggered, so waiting on data already there returns at once.
+        if (drained) loop.await(channel, SelectionKey.OP_READ)
+        while (true) {
+            val n = channel.read(into)
+            if (n != 0) {
+                drained = n in 1 until length
+                return n
+            }
+            loop.await(channel, SelectionKey.OP_READ)
+        }
     }
 
     override suspend fun write(bytes: ByteArray) {
-        output.writeFully(bytes)
-        output.flush()
+        val from = ByteBuffer.wrap(bytes)
+        while (from.hasRemaining()) {
+            if (channel.write(from) == 0) loop.await(channel, SelectionKey.OP_WRITE)
+        }
     }
 
     override fun close() {
-        socket.close()
+        channel.close()
     }
 }

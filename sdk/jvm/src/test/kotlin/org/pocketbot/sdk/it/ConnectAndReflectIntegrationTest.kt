@@ -49,7 +49,7 @@ class ConnectAndReflectIntegrationTest {
         assertTrue(reduced.zipWithNext().all { (a, b) -> b.timeMs > a.timeMs })
         assertTrue(robot.linkStats.value.reducedStates >= 20)
         assertEquals(0, robot.linkStats.value.dropped)
-        assertEquals(2, emu.handleOf(robot).settingsBytes()[17].toInt(), "settings.sync.mode on the robot")
+        assertEquals(SyncMode.REDUCED.code, valueIn(emu.handleOf(robot).settingsBytes(), "sync.mode"), "settings.sync.mode on the robot")
         robot.close()
     }
 
@@ -57,15 +57,14 @@ class ConnectAndReflectIntegrationTest {
     fun settingWriteIsAppliedOnTheRobotAndRefusalIsTyped() = withEmulator { emu ->
         val robot = connectAll(emu).single()
         val sim = emu.handleOf(robot)
-        robot.settings.linePid.kp.set(1.5f)
-        assertEquals(1.5f, robot.settings.linePid.kp.value)
+        robot.settings.linePid.kp.set(1.5)
+        assertEquals(1.5, robot.settings.linePid.kp.value)
         val onRobot = sim.settingsBytes()
-        assertEquals(1.5f, Float.fromBits((onRobot[70].toInt() and 0xFF) or ((onRobot[71].toInt() and 0xFF) shl 8) or
-            ((onRobot[72].toInt() and 0xFF) shl 16) or ((onRobot[73].toInt() and 0xFF) shl 24)))
+        assertEquals(1.5, valueIn(onRobot, "line_pid.kp"))
 
-        val e = assertFailsWith<SettingRefusedException> { robot.settings.geometry.wheelBaseM.set(2.0f) }
+        val e = assertFailsWith<SettingRefusedException> { robot.settings.geometry.wheelBaseM.set(2.0) }
         assertEquals(ErrorCode.SETTINGS_VALUE, e.code)
-        assertEquals(0.026f, robot.settings.geometry.wheelBaseM.value)
+        assertEquals(0.026f.toDouble(), robot.settings.geometry.wheelBaseM.value)
         assertContentEquals(onRobot, sim.settingsBytes(), "a refused write must not change the robot")
 
         robot.settings.identity.name.set("Hello")
@@ -77,11 +76,11 @@ class ConnectAndReflectIntegrationTest {
     @Test
     fun jsonExportImportAcrossTwoRobots() = withEmulator(robots = 2) { emu ->
         val (a, b) = connectAll(emu)
-        a.settings.lineFollow.speedMps.set(0.3f)
+        a.settings.lineFollow.speedMps.set(0.3)
         a.settings.proximity.holdMs.set(500)
         val written = b.settings.importJson(a.settings.exportJson())
         assertTrue(written >= 2, "robot_id and name differ too: $written")
-        assertEquals(0.3f, b.settings.lineFollow.speedMps.value)
+        assertEquals(0.3f.toDouble(), b.settings.lineFollow.speedMps.value)
         assertContentEquals(emu.handleOf(a).settingsBytes(), emu.handleOf(b).settingsBytes())
         a.close(); b.close()
     }
@@ -99,7 +98,7 @@ class ConnectAndReflectIntegrationTest {
                 if (u.state.power.batteryMv !in 2500..5000 || u.state.time.timeMs > 1_000_000) insane++
             }
         }
-        robot.settings.linePid.kd.set(0.003f) // commands still get through, retransmitted as needed
+        robot.settings.linePid.kd.set(0.003) // commands still get through, retransmitted as needed
         delay(2000)
         watcher.cancel()
         sim.link = LinkSettings()
@@ -107,7 +106,7 @@ class ConnectAndReflectIntegrationTest {
         assertTrue(stats.dropped > 0, "some frames must have been dropped: $stats")
         assertTrue(stats.fullStates > 100, "states keep flowing: $stats")
         assertEquals(0, insane, "a corrupted state was applied")
-        assertEquals(0.003f, robot.settings.linePid.kd.value)
+        assertEquals(0.003f.toDouble(), robot.settings.linePid.kd.value)
         robot.close()
     }
 
@@ -115,14 +114,57 @@ class ConnectAndReflectIntegrationTest {
     fun secondConnectSkipsTheSettingsRead() = withEmulator { emu ->
         val cache = org.pocketbot.sdk.InMemorySettingsCache()
         val device = emu.discoverer().discover().first()
-        val t0 = System.nanoTime()
-        device.connect(this, itOptions().copy(settingsCache = cache)).close()
-        val first = System.nanoTime() - t0
-        val t1 = System.nanoTime()
+        val t0 = emu.time
+        device.connect(this, itOptions().copy(settingsCache = cache)).disconnect()
+        val first = emu.time - t0
+        val t1 = emu.time
         val again = device.connect(this, itOptions().copy(settingsCache = cache))
-        val second = System.nanoTime() - t1
+        val second = emu.time - t1
         assertMirrors(again, emu.robots.single().settingsBytes())
-        assertTrue(second < first, "cached connect ($second ns) should beat the first ($first ns)")
+        // Simulated time: the settings read is about 200 bytes at 115200 Bd, some 20 ms of link time.
+        assertTrue(second < first, "cached connect ($second) should beat the first ($first)")
         again.close()
+    }
+
+    @Test
+    fun twoRobotsWithTheSameIdKeepTheirOwnSettings() = withEmulator(robots = 2) { emu ->
+        val cache = org.pocketbot.sdk.InMemorySettingsCache()
+        val (a, b) = connectAll(emu, itOptions().copy(settingsCache = cache))
+        b.settings.identity.robotId.set(1) // both are robot 1 now, as every fresh robot is
+        a.settings.linePid.kp.set(1.25)
+        b.settings.linePid.kp.set(2.5)
+        a.disconnect()
+        b.disconnect()
+        val (a2, b2) = connectAll(emu, itOptions().copy(settingsCache = cache))
+        assertEquals(1, a2.identity.robotId)
+        assertEquals(1, b2.identity.robotId)
+        assertEquals(1.25, a2.settings.linePid.kp.value)
+        assertEquals(2.5, b2.settings.linePid.kp.value)
+        assertMirrors(b2, emu.handleOf(b2).settingsBytes())
+        a2.close(); b2.close()
+    }
+
+    @Test
+    fun aRobotResetMidSessionIsReadAgain() = withEmulator { emu ->
+        val robot = connectAll(emu).single()
+        val sim = emu.handleOf(robot)
+        robot.settings.linePid.kp.set(1.25)
+        robot.settings.save()
+        robot.settings.linePid.kp.set(2.5) // not saved: a reset forgets it
+        sim.reset()
+        robot.settings.linePid.kp.changes.first { it == 1.25 }
+        assertMirrors(robot, sim.settingsBytes())
+        robot.close()
+    }
+
+    @Test
+    fun syncModeWrittenAsASettingIsTheReflectorsToo() = withEmulator { emu ->
+        val robot = connectAll(emu).single()
+        robot.settings.sync.mode.set(SyncMode.NONE)
+        assertEquals(SyncMode.NONE, robot.reflector.mode.value)
+        delay(10_000)
+        assertEquals(ConnectionState.Connected, robot.connection.value, "no state is expected: silence is no loss")
+        assertEquals(0, robot.linkStats.value.reconnects)
+        robot.close()
     }
 }

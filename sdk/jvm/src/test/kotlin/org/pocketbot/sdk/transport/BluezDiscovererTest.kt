@@ -116,7 +116,7 @@ class BluezDiscovererTest {
             ttyFor = mapOf("00:11:22:33:44:05" to tty.path)::get).discover().first()
         val t = device.open()
         assertEquals("serial:${tty.path}", t.address)
-        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq = 3))
+        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, 1L), seq = 3))
         assertEquals(FrameResult.Decoded(3, robot.hello), Frames.decode(t.incoming.receive()))
         t.close()
     }

@@ -14,6 +14,21 @@ import kotlinx.coroutines.withTimeoutOrNull
 import org.junit.jupiter.api.Assumptions.assumeTrue
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.Speed
+import org.pocketbot.emulator.transport.ListenAddress
+import org.pocketbot.sdk.InMemorySettingsCache
+import org.pocketbot.sdk.Movement
+import org.pocketbot.sdk.MovementOutcome
+import org.pocketbot.sdk.Pose
+import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.connect
+import java.net.ConnectException
+import java.net.Inet4Address
+import java.net.InetAddress
+import java.net.NetworkInterface
+import java.net.Socket
+import kotlin.math.hypot
+import kotlin.test.assertFailsWith
+import kotlin.test.assertTrue
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.Hello
@@ -34,10 +49,10 @@ class EmulatorTransportTest {
     private fun test(block: suspend CoroutineScope.() -> Unit): Unit =
         runBlocking(Dispatchers.IO) { withTimeout(60.seconds) { block() } }
 
-    /** An emulator of [robots] robots running in real time, with TCP endpoints; returns its control port. */
-    private fun emulator(robots: Int): Pair<Emulator, Int> {
+    /** An emulator of [robots] robots running in real time, with TCP endpoints on [listen]; returns its control port. */
+    private fun emulator(robots: Int, listen: InetAddress = ListenAddress.LOOPBACK): Pair<Emulator, Int> {
         val emu = Emulator.local(robots = robots).also { toClose += it }
-        val controlPort = emu.startTcp(basePort = 0, controlPort = 0)
+        val controlPort = emu.startTcp(basePort = 0, controlPort = 0, listen = listen)
         emu.start(Speed.Realtime(1.0))
         return emu to controlPort
     }
@@ -48,7 +63,7 @@ class EmulatorTransportTest {
      */
     private suspend fun hello(t: Transport, seq: Int): Hello {
         val seen = mutableListOf<String>()
-        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq))
+        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, 1L), seq))
         return withTimeoutOrNull(15.seconds) {
             while (true) {
                 val r = Frames.decode(t.incoming.receive())
@@ -74,16 +89,51 @@ class EmulatorTransportTest {
         for ((i, device) in devices.withIndex()) {
             val t = device.open()
             assertCompatible(hello(t, seq = 10 + i), emu.robots[i].id)
-            assertEquals(0L, (t as TcpTransport).framingErrors.value)
+            assertEquals(0L, (t as TcpTransport).droppedFrames.value.total)
             t.close()
         }
+    }
+
+    @Test
+    fun anEmulatorOnTheNetworkIsFoundAndDrivenFromAnotherMachinesPointOfView() = test {
+        val network = NetworkInterface.getNetworkInterfaces().toList().filter { it.isUp && !it.isLoopback }
+            .flatMap { it.inetAddresses.toList() }.firstOrNull { it is Inet4Address && !it.isLinkLocalAddress }
+        assumeTrue(network != null, "this machine has no network address besides loopback: a phone's view of the emulator cannot be tried here")
+        val host = network!!.hostAddress
+        val (emu, controlPort) = emulator(robots = 2, listen = ListenAddress.ANY)
+        // As a phone on the same Wi-Fi does: the control port at the computer's network address, the robots there too.
+        val devices = EmulatorDiscoverer(host, controlPort).list()
+        assertEquals(emu.robots.map { "tcp://$host:${it.tcpPort}" }, devices.map { it.address })
+        val robot = devices[1].connect(this, RobotOptions(settingsCache = InMemorySettingsCache()))
+        val sim = emu.robots[1]
+        assertEquals(sim.name, robot.identity.name)
+        assertEquals(host, sim.tcpClient?.address?.hostAddress, "the robot is held from the network address")
+
+        sim.place(Pose.ofDegrees(0.5, 0.5, 30.0)) // open floor
+        val start = sim.truePose
+        val result = robot.locomotion.enqueue(Movement.Straight(0.05, speedMps = 0.1)).await()
+        assertEquals(MovementOutcome.FINISHED, result.outcome, "$result")
+        val moved = hypot(sim.truePose.xM - start.xM, sim.truePose.yM - start.yM)
+        assertTrue(moved in 0.045..0.055, "driven 5 cm over the network: the robot really moved ${moved * 1000} mm")
+        robot.disconnect()
+    }
+
+    @Test
+    fun anEmulatorOnLoopbackIsNotReachableFromTheNetwork() = test {
+        val network = NetworkInterface.getNetworkInterfaces().toList().filter { it.isUp && !it.isLoopback }
+            .flatMap { it.inetAddresses.toList() }.firstOrNull { it is Inet4Address && !it.isLinkLocalAddress }
+        assumeTrue(network != null, "this machine has no network address besides loopback: nothing to be refused from")
+        val (emu, controlPort) = emulator(robots = 1)
+        val e = assertFailsWith<TransportLostException> { EmulatorDiscoverer(network!!.hostAddress, controlPort).list() }
+        assertTrue(e.message!!.contains("refused"), "refused, not timed out: $e")
+        assertFailsWith<ConnectException> { Socket(network, emu.robots.single().tcpPort).close() }
     }
 
     @Test
     fun theFirmwareCountsACorruptedFrameTheHostSent() = test {
         val (_, controlPort) = emulator(robots = 1)
         val t = EmulatorDiscoverer(controlPort = controlPort).list().single().open()
-        val frame = Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq = 1)
+        val frame = Frames.encode(HelloRequest(ProtocolInfo.VERSION, 1L), seq = 1)
         frame[frame.size - 1] = (frame[frame.size - 1].toInt() xor 0x5A).toByte()
         t.send(frame)
         // the robot's own state reports the CRC error: proof that the host's bytes reached the firmware intact

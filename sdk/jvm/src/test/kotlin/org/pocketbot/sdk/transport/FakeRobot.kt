@@ -14,14 +14,16 @@ import org.pocketbot.protocol.SlipDecoder
 
 /**
  * The robot end of a byte link for tests: reads SLIP frames on its own thread, answers a [HelloRequest] with a
- * [Hello] (same seq) and keeps every other frame in [received]. Works over any pair of blocking streams: a
- * socket, a pty.
+ * [Hello] (same seq) and keeps every other frame in [received]. With [answersCommands] it also acknowledges every
+ * acknowledged command and answers `read_settings` (the default settings) and `read_movements` (an empty log), enough
+ * for the SDK's handshake. Works over any pair of blocking streams: a socket, a pty.
  */
 class FakeRobot(
     private val input: InputStream,
     private val output: OutputStream,
     val hello: Hello = hello(3, "PocketBot-3"),
     private val onEnd: () -> Unit = {},
+    private val answersCommands: Boolean = false,
 ) : AutoCloseable {
     val received = LinkedBlockingQueue<ByteArray>()
     @Volatile var ended = false
@@ -38,7 +40,10 @@ class FakeRobot(
                 decoder.feed(buf, 0, n) { frame ->
                     val r = Frames.decode(frame)
                     if (r is FrameResult.Decoded && r.packet is HelloRequest) sendFrame(Frames.encode(hello, r.seq))
-                    else received.add(frame)
+                    else {
+                        received.add(frame)
+                        if (answersCommands && r is FrameResult.Decoded) answer(r.seq, r.packet)
+                    }
                 }
             }
         } catch (_: Exception) {
@@ -47,6 +52,19 @@ class FakeRobot(
             ended = true
             onEnd()
         }
+    }
+
+    private fun answer(seq: Int, packet: org.pocketbot.protocol.Packet) {
+        if (org.pocketbot.protocol.PACKET_SPECS[packet.type]?.acked != true) return
+        when (packet) {
+            is org.pocketbot.protocol.ReadSettings -> DEFAULT_SETTINGS.toList().chunked(64).forEachIndexed { i, chunk ->
+                sendFrame(Frames.encode(org.pocketbot.protocol.SettingsData(i * 64, chunk.toByteArray()), 0))
+            }
+            is org.pocketbot.protocol.ReadMovements ->
+                sendFrame(Frames.encode(org.pocketbot.protocol.MovementLog(0, 0, 0, List(16) { 0 }, List(16) { 0 }, List(16) { 0f }), 0))
+            else -> {}
+        }
+        sendFrame(Frames.encode(org.pocketbot.protocol.Ack(packet.type), seq))
     }
 
     fun sendFrame(frame: ByteArray) = sendRaw(Slip.encode(frame))
@@ -72,7 +90,9 @@ class FakeRobot(
     }
 
     companion object {
+        val DEFAULT_SETTINGS: ByteArray = ByteArray(ProtocolInfo.SETTINGS_SIZE).also { org.pocketbot.protocol.SETTINGS_DEFAULTS.encodeTo(it, 0) }
+
         fun hello(id: Int, name: String) = Hello(id, name, 0, 1, 0, ProtocolInfo.VERSION, ProtocolInfo.LAYOUT_HASH,
-            ProtocolInfo.SETTINGS_SIZE, ProtocolInfo.STATE_SIZE)
+            ProtocolInfo.SETTINGS_SIZE, ProtocolInfo.STATE_SIZE, 0, org.pocketbot.protocol.Crc16.compute(DEFAULT_SETTINGS))
     }
 }

@@ -15,6 +15,7 @@ import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.channels.ClosedReceiveChannelException
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
+import kotlinx.coroutines.flow.toList
 import org.junit.jupiter.api.Assumptions.assumeTrue
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
@@ -43,11 +44,38 @@ class SerialTransportTest {
     }
 
     @Test
+    fun theSerialDiscovererFindsTheRobotBehindAPortAndSkipsSilentAndMissingOnes() = test {
+        val robot = link()
+        assumeTrue(Socat.available, "socat is not installed")
+        val silent = Socat.ptyPair().also { toClose += it } // nothing answers on the other end
+        val ports = listOf(robot.hostPath.path, silent.links[0].path, "/dev/pocketbot-no-such-port")
+        val found = SerialDiscoverer(ports = { ports }).discover().toList()
+        assertEquals(listOf(robot.hostPath.path), found.map { (it as SerialRobotDevice).path })
+        assertEquals(robot.robot.hello.name, found.single().name)
+        assertEquals("serial:${robot.hostPath.path}", found.single().address)
+    }
+
+    @Test
+    fun aMergedSearchGoesOnWhenOneSourceFails() = test {
+        val robot = link()
+        val failures = mutableListOf<String>()
+        val merged = MergedDiscoverer(
+            mapOf(
+                "serial" to SerialDiscoverer(ports = { listOf(robot.hostPath.path) }),
+                "emulator" to EmulatorDiscoverer(controlPort = java.net.ServerSocket(0).use { it.localPort }),
+            ),
+        ) { source, e -> synchronized(failures) { failures += "$source: ${e.message}" } }
+        val found = merged.discover().toList()
+        assertEquals(1, found.size)
+        assertTrue(failures.single().startsWith("emulator: no emulator control port"), "$failures")
+    }
+
+    @Test
     fun aHelloRequestIsAnsweredThroughAPty() = test {
         val link = link()
         val t = SerialRobotDevice(link.hostPath.path).open()
         assertEquals("serial:${link.hostPath.path}", t.address)
-        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq = 5))
+        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, 1L), seq = 5))
         assertEquals(FrameResult.Decoded(5, link.robot.hello), Frames.decode(t.incoming.receive()))
         t.close()
     }
@@ -57,7 +85,7 @@ class SerialTransportTest {
         val link = link()
         val t = SerialTransport.open(link.socat.realPath(link.hostPath))
         assertTrue(t.address.startsWith("serial:/dev/pts/"), t.address)
-        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq = 6))
+        t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, 1L), seq = 6))
         assertEquals(FrameResult.Decoded(6, link.robot.hello), Frames.decode(t.incoming.receive()))
         t.close()
     }
@@ -72,7 +100,7 @@ class SerialTransportTest {
         for (f in frames) assertContentEquals(f, link.robot.nextFrame())
         link.robot.sendRaw(frames.map { Slip.encode(it) }.reduce { a, b -> a + b })
         for (f in frames) assertContentEquals(f, t.incoming.receive())
-        assertEquals(0L, t.framingErrors.value)
+        assertEquals(0L, t.droppedFrames.value.total)
         t.close()
     }
 
@@ -97,7 +125,7 @@ class SerialTransportTest {
         assertFailsWith<TransportLostException> { t.send(byteArrayOf(1, 2, 3, 4, 5)) }
         // the port is free again
         val again = SerialTransport.open(link.hostPath.path)
-        again.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), seq = 1))
+        again.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, 1L), seq = 1))
         assertEquals(FrameResult.Decoded(1, link.robot.hello), Frames.decode(again.incoming.receive()))
         again.close()
     }

@@ -17,17 +17,17 @@ class GoldenVectorsTest {
         assertContentEquals(hex(slipHex), Slip.encode(frame), "SLIP of ${expected::class.simpleName}")
     }
 
-    @Test fun hello0() = check(Hello(46, "", 84, 175, 14, 37636, 2715228012L, 25122, 12852), 145,
-        "01911e2e0000000000000000000000000000000054af0e04936c17d7a122623432c4e1",
-        "c001911e2e0000000000000000000000000000000054af0e04936c17d7a122623432c4e1c0")
+    @Test fun hello0() = check(Hello(46, "", 84, 175, 14, 37636, 2715228012L, 25122, 12852, 145, 21251), 199,
+        "01c7212e0000000000000000000000000000000054af0e04936c17d7a122623432910353b392",
+        "c001c7212e0000000000000000000000000000000054af0e04936c17d7a122623432910353b392c0")
 
-    @Test fun stateFull0() = check(StateFull(RobotState(StateTime(696122860L, 7930, 54874), StateEncoders(-758112980, 5651887), StateWheels(16547, 21878, -4350, 9275), StateLine(listOf(50866, 35886, 12479, 5730, 34814, 63122, 38191, 48983), -11557, 243), StateLineFollow(1, 3), StateProximity(ProximitySide(208, 187, 2, 0), ProximitySide(226, 84, 2, 1)), StateColour(167, 194, 178, 101, 4), StateAccel(28935, -28326, -28703), StatePower(15313, 51943, 21044), StateIndicators(170, 64), StateLocomotion(2, 145, 62796, 15118), StateErrors(21874, 6319, 62879, 9177, 54331))), 151,
-        "029758ecfd7d29fa1e5ad62c1dd0d2af3d5600a340765502ef3b24b2c62e8cbf306216fe8792f62f9557bfdbd2f30103d0bb0200e2540201a7c2b2650407715a91e18fd13be7ca3452aa4002914cf50e3b7255af189ff5d9233bd4c162",
-        "c0029758ecfd7d29fa1e5ad62c1dd0d2af3d5600a340765502ef3b24b2c62e8cbf306216fe8792f62f9557bfdbddd2f30103d0bb0200e2540201a7c2b2650407715a91e18fd13be7ca3452aa4002914cf50e3b7255af189ff5d9233bd4c162c0")
+    @Test fun stateFull0() = check(StateFull(RobotState(StateTime(696122860L, 7930, 54874, 1389370668L), StateEncoders(5651887, 70113854), StateWheels(21878, -4350, 9275, 18098), StateLine(listOf(35886, 12479, 5730, 34814, 63122, 38191, 48983, 21211), 29472, 209), StateLineFollow(LineFollowStatus.FOLLOWING, Colour.BLUE), StateProximity(ProximitySide(208, 187, IrLed.REAR, DistanceClass.NONE), ProximitySide(226, 84, IrLed.REAR, DistanceClass.FAR)), StateColour(167, 194, 178, 101, Colour.BLUE), StateAccel(28935, -28326, -28703), StatePower(15313, 51943, 21044), StateIndicators(170, 64), StateLocomotion(LocoMode.TRACK, 183, 37281, 62796), StateTrack(TrackStatus.OFF, 85, 6319, 245), StateErrors(9177, 54331, 38877, 34777, 4794))), 33,
+        "022161ecfd7d29fa1e5ad62c1dd052af3d56003eda2d04765502ef3b24b2462e8cbf306216fe8792f62f9557bfdb522073d10104d0bb0200e2540201a7c2b2650407715a91e18fd13be7ca3452aa4005b7a1914cf50055af18f5d9233bd4dd97d987ba12c5ca",
+        "c0022161ecfd7d29fa1e5ad62c1dd052af3d56003eda2d04765502ef3b24b2462e8cbf306216fe8792f62f9557bfdbdd522073d10104d0bb0200e2540201a7c2b2650407715a91e18fd13be7ca3452aa4005b7a1914cf50055af18f5d9233bd4dd97d987ba12c5cac0")
 
-    @Test fun stateFull1() = check(StateFull(RobotState(StateTime(2748158384L, 53068, 54418), StateEncoders(-421575140, 605602763), StateWheels(2592, 12823, 31183, 2675), StateLine(listOf(44640, 35483, 16907, 53960, 36538, 37906, 34611, 47537), -10232, 158), StateLineFollow(0, 3), StateProximity(ProximitySide(79, 172, 1, 2), ProximitySide(245, 200, 3, 1)), StateColour(81, 28, 163, 186, 4), StateAccel(-10646, 19683, 26322), StatePower(61670, 36122, 4356), StateIndicators(91, 153), StateLocomotion(0, 153, 13268, 37041), StateErrors(8665, 45864, 21110, 31758, 2145))), 68,
-        "024458b091cda34ccf92d41c46dfe6cbc31824200a1732cf79730a60ae9b8a0b42c8d2ba8e12943387b1b908d89e00034fac0102f5c80301511ca3ba046ad6e34cd266e6f01a8d04115b990099d433b190d92128b376520e7c61086d4a",
-        "c0024458b091cda34ccf92d41c46dfe6cbc31824200a1732cf79730a60ae9b8a0b42c8d2ba8e12943387b1b908d89e00034fac0102f5c80301511ca3ba046ad6e34cd266e6f01a8d04115b990099d433b190d92128b376520e7c61086d4ac0")
+    @Test fun stateFull1() = check(StateFull(RobotState(StateTime(2748158384L, 53068, 54418, 1725908508L), StateEncoders(605602763, 1843693223), StateWheels(31183, 2675, 11872, 2715), StateLine(listOf(16907, 53960, 36538, 37906, 34611, 47537, 22536, 40612), -11851, 213), StateLineFollow(LineFollowStatus.OFF, Colour.BLACK), StateProximity(ProximitySide(109, 186, IrLed.LEFT, DistanceClass.NEAR), ProximitySide(207, 86, IrLed.RIGHT, DistanceClass.NONE)), StateColour(163, 186, 86, 204, Colour.RED), StateAccel(28902, 3354, 4356), StatePower(23478, 39233, -24094), StateIndicators(153, 51), StateLocomotion(LocoMode.TELEOP, 33, 45864, 21110), StateTrack(TrackStatus.FOLLOWING, 8, 17603, 254), StateErrors(50802, 40126, 55071, 42834, 17300))), 51,
+        "023361b091cda34ccf92d41c46df66cbc31824a786e46dcf79730a602e9b0a0b42c8d2ba8e12943387b1b90858a49eb5d1d500026dba0303cf560100a3ba56cc03e6701a0d0411b65b4199e2a19933022128b376520108c344fe72c6be9c1fd752a794431432",
+        "c0023361b091cda34ccf92d41c46df66cbc31824a786e46dcf79730a602e9b0a0b42c8d2ba8e12943387b1b90858a49eb5d1d500026dba0303cf560100a3ba56cc03e6701a0d0411b65b4199e2a19933022128b376520108c344fe72c6be9c1fd752a794431432c0")
 
     @Test fun stateReduced0() = check(StateReduced(4236337075L, 577428250, -1214460524, -19779, -5853, 25162, 106), 17,
         "031113b35f81fc1adb6a2294cd9cb7bdb223e94a626a943c",
@@ -65,13 +65,17 @@ class GoldenVectorsTest {
         "08a906e501006f9400554e",
         "c008a906e501006f9400554ec0")
 
-    @Test fun movementDone0() = check(MovementDone(13422), 17,
-        "0911026e34f1e4",
-        "c00911026e34f1e4c0")
+    @Test fun movementDone0() = check(MovementDone(13422, 0, Float.fromBits(0x44178f00.toInt())), 158,
+        "099e076e3400008f174464b1",
+        "c0099e076e3400008f174464b1c0")
 
-    @Test fun helloRequest0() = check(HelloRequest(16041), 0,
-        "100002a93e4d0b",
-        "c0100002a93e4d0bc0")
+    @Test fun movementLog0() = check(MovementLog(44742, 159, 77, listOf(49693, 56015, 27692, 47567, 62595, 16277, 40055, 5201, 14919, 33128, 59708, 26064, 64706, 17794, 20534, 54697), listOf(0, 2, 2, 0, 2, 1, 2, 1, 2, 2, 2, 0, 0, 2, 1, 3), listOf(Float.fromBits(0xc45ee500.toInt()), Float.fromBits(0x440d1200.toInt()), Float.fromBits(0xc407d200.toInt()), Float.fromBits(0xc3b63c00.toInt()), Float.fromBits(0xc3311400.toInt()), Float.fromBits(0x44787800.toInt()), Float.fromBits(0xc3135400.toInt()), Float.fromBits(0x446cbd00.toInt()), Float.fromBits(0x442b4300.toInt()), Float.fromBits(0x4459a000.toInt()), Float.fromBits(0xc479e500.toInt()), Float.fromBits(0xc4644700.toInt()), Float.fromBits(0x4436ae00.toInt()), Float.fromBits(0x44568a00.toInt()), Float.fromBits(0xc462c700.toInt()), Float.fromBits(0x44444a00.toInt()))), 171,
+        "0aab74c6ae9f4d1dc2cfda2c6ccfb983f4953f779c5114473a68813ce9d065c2fc82453650a9d50002020002010201020202000002010300e55ec400120d4400d207c4003cb6c3001431c300787844005413c300bd6c4400432b4400a0594400e579c4004764c400ae3644008a564400c762c4004a44446c3a",
+        "c00aab74c6ae9f4d1dc2cfda2c6ccfb983f4953f779c5114473a68813ce9d065c2fc82453650a9d50002020002010201020202000002010300e55ec400120d4400d207c4003cb6c3001431c300787844005413c300bd6c4400432b4400a0594400e579c4004764c400ae3644008a564400c762c4004a44446c3ac0")
+
+    @Test fun helloRequest0() = check(HelloRequest(16041, 379033379L), 0,
+        "100006a93e239797169522",
+        "c0100006a93e239797169522c0")
 
     @Test fun heartbeat0() = check(Heartbeat, 0,
         "110000cfb8",
@@ -132,5 +136,13 @@ class GoldenVectorsTest {
     @Test fun irSend1() = check(IrSend(59, byteArrayOf(107, -28, 50, 39)), 83,
         "2653053b6be43227d657",
         "c02653053b6be43227d657c0")
+
+    @Test fun track0() = check(Track(1), 13,
+        "280d01010c57",
+        "c0280d01010c57c0")
+
+    @Test fun readMovements0() = check(ReadMovements, 45,
+        "272d0070bf",
+        "c0272d0070bfc0")
 
 }

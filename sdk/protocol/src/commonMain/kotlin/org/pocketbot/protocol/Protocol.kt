@@ -3,104 +3,379 @@ package org.pocketbot.protocol
 
 /** Constants of the protocol this SDK speaks. */
 public object ProtocolInfo {
-    public const val VERSION: Int = 1
+    public const val VERSION: Int = 2
     /** Hash of every packet, settings and state layout; compared with the robot's `hello`. */
-    public const val LAYOUT_HASH: Long = 0xFBAC1F50L
+    public const val LAYOUT_HASH: Long = 0xC4D4A61DL
     /** Firmware version this SDK was generated with. */
     public const val FIRMWARE_VERSION: String = "0.1.0"
     public const val MAX_PAYLOAD: Int = 120
-    public const val SETTINGS_SIZE: Int = 169
-    public const val STATE_SIZE: Int = 88
+    public const val SETTINGS_SIZE: Int = 175
+    public const val STATE_SIZE: Int = 97
 }
 
-/** How the robot mirrors its state to the host. */
+/**
+ * How the robot mirrors its state to the host.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class SyncMode(public val code: Int) {
-    NONE(0), FULL(1), REDUCED(2);
+    NONE(0),
+    FULL(1),
+    REDUCED(2),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): SyncMode? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): SyncMode = when (code) {
+            0 -> NONE
+            1 -> FULL
+            2 -> REDUCED
+            else -> UNKNOWN
+        }
     }
 }
 
-/** What drives the motors. */
+/**
+ * What drives the motors.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class LocoMode(public val code: Int) {
-    IDLE(0), MOVEMENT(1), TELEOP(2), LINE_FOLLOW(3), FAILSAFE(4);
+    IDLE(0),
+    MOVEMENT(1),
+    TELEOP(2),
+    LINE_FOLLOW(3),
+    FAILSAFE(4),
+    /** The track behaviour (thesis A.3) drives them on its own: the link failsafe leaves it running. */
+    TRACK(5),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): LocoMode? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): LocoMode = when (code) {
+            0 -> IDLE
+            1 -> MOVEMENT
+            2 -> TELEOP
+            3 -> LINE_FOLLOW
+            4 -> FAILSAFE
+            5 -> TRACK
+            else -> UNKNOWN
+        }
     }
 }
 
-/** State of the line follower. */
+/**
+ * State of the line follower.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class LineFollowStatus(public val code: Int) {
-    OFF(0), FOLLOWING(1), LOST(2);
+    OFF(0),
+    FOLLOWING(1),
+    LOST(2),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): LineFollowStatus? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): LineFollowStatus = when (code) {
+            0 -> OFF
+            1 -> FOLLOWING
+            2 -> LOST
+            else -> UNKNOWN
+        }
     }
 }
 
-/** Surface colour classified by the colour sensor. */
+/**
+ * Surface colour classified by the colour sensor.
+ * [fromCode] maps a code this side does not know to [UNKNOWN].
+ */
 public enum class Colour(public val code: Int) {
-    UNKNOWN(0), WHITE(1), BLACK(2), RED(3), BLUE(4), GREEN(5);
+    UNKNOWN(0),
+    WHITE(1),
+    BLACK(2),
+    RED(3),
+    BLUE(4),
+    GREEN(5);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): Colour? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): Colour = when (code) {
+            0 -> UNKNOWN
+            1 -> WHITE
+            2 -> BLACK
+            3 -> RED
+            4 -> BLUE
+            5 -> GREEN
+            else -> UNKNOWN
+        }
     }
 }
 
-/** Line following colour mode: with `segments`, red tape slows down and blue tape speeds up. */
+/**
+ * Line following colour mode: with `segments`, red tape slows down and blue tape speeds up.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class ColourMode(public val code: Int) {
-    PLAIN(0), SEGMENTS(1);
+    PLAIN(0),
+    SEGMENTS(1),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): ColourMode? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): ColourMode = when (code) {
+            0 -> PLAIN
+            1 -> SEGMENTS
+            else -> UNKNOWN
+        }
     }
 }
 
-/** The directed IR LEDs of a robot (about +-15 degrees each). */
+/**
+ * The directed IR LEDs of a robot (about +-15 degrees each).
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class IrLed(public val code: Int) {
-    FRONT(0), RIGHT(1), REAR(2), LEFT(3);
+    FRONT(0),
+    RIGHT(1),
+    REAR(2),
+    LEFT(3),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): IrLed? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): IrLed = when (code) {
+            0 -> FRONT
+            1 -> RIGHT
+            2 -> REAR
+            3 -> LEFT
+            else -> UNKNOWN
+        }
     }
 }
 
-/** Which IR receiver heard a message. */
+/**
+ * Which IR receiver heard a message.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class Side(public val code: Int) {
-    FRONT(0), REAR(1);
+    FRONT(0),
+    REAR(1),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): Side? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): Side = when (code) {
+            0 -> FRONT
+            1 -> REAR
+            else -> UNKNOWN
+        }
     }
 }
 
-/** Rough distance of another robot, from the lowest IR power it was heard at. */
+/**
+ * Rough distance of another robot, from the lowest IR power it was heard at.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class DistanceClass(public val code: Int) {
-    NONE(0), FAR(1), MID(2), NEAR(3);
+    NONE(0),
+    FAR(1),
+    MID(2),
+    NEAR(3),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): DistanceClass? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): DistanceClass = when (code) {
+            0 -> NONE
+            1 -> FAR
+            2 -> MID
+            3 -> NEAR
+            else -> UNKNOWN
+        }
     }
 }
 
-/** What was wrong with a received packet (error packet and Kotlin typed errors). */
+/**
+ * What was wrong with a received packet (error packet and Kotlin typed errors).
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
 public enum class ErrorCode(public val code: Int) {
-    NONE(0), BAD_CRC(1), TOO_SHORT(2), TOO_LONG(3), UNKNOWN_TYPE(4), BAD_LENGTH(5), SETTINGS_RANGE(6), SETTINGS_VALUE(7), QUEUE_FULL(8), BAD_ARGUMENT(9), FRAMING(10), BUSY(11);
+    NONE(0),
+    BAD_CRC(1),
+    TOO_SHORT(2),
+    TOO_LONG(3),
+    UNKNOWN_TYPE(4),
+    BAD_LENGTH(5),
+    SETTINGS_RANGE(6),
+    SETTINGS_VALUE(7),
+    QUEUE_FULL(8),
+    BAD_ARGUMENT(9),
+    FRAMING(10),
+    BUSY(11),
+    BAD_SEQUENCE(12),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): ErrorCode? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): ErrorCode = when (code) {
+            0 -> NONE
+            1 -> BAD_CRC
+            2 -> TOO_SHORT
+            3 -> TOO_LONG
+            4 -> UNKNOWN_TYPE
+            5 -> BAD_LENGTH
+            6 -> SETTINGS_RANGE
+            7 -> SETTINGS_VALUE
+            8 -> QUEUE_FULL
+            9 -> BAD_ARGUMENT
+            10 -> FRAMING
+            11 -> BUSY
+            12 -> BAD_SEQUENCE
+            else -> UNKNOWN
+        }
     }
 }
 
-/** The firmware module that wrote a debug text. */
-public enum class DebugModule(public val code: Int) {
-    MAIN(0), PROTOCOL(1), LOCOMOTION(2), LINE(3), PROXIMITY(4), SENSORS(5), SETTINGS(6), SCHEDULER(7);
+/**
+ * How a queued movement ended (movement_done, movement_log).
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
+public enum class MovementOutcome(public val code: Int) {
+    /** It ran to its end. */
+    FINISHED(0),
+    /** A host command (stop, wheel_speeds, line_follow) ended it while it ran. */
+    STOPPED(1),
+    /** The link failsafe ended it, running or still queued. */
+    FAILSAFE(2),
+    /** A host command cleared it from the queue before it started. */
+    DROPPED(3),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
     public companion object {
-        /** The value with this wire code, or null for a code this SDK does not know. */
-        public fun fromCode(code: Int): DebugModule? = entries.firstOrNull { it.code == code }
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): MovementOutcome = when (code) {
+            0 -> FINISHED
+            1 -> STOPPED
+            2 -> FAILSAFE
+            3 -> DROPPED
+            else -> UNKNOWN
+        }
     }
+}
+
+/**
+ * The firmware module that wrote a debug text.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
+public enum class DebugModule(public val code: Int) {
+    MAIN(0),
+    PROTOCOL(1),
+    LOCOMOTION(2),
+    LINE(3),
+    PROXIMITY(4),
+    SENSORS(5),
+    SETTINGS(6),
+    SCHEDULER(7),
+    TRACK(8),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
+    public companion object {
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): DebugModule = when (code) {
+            0 -> MAIN
+            1 -> PROTOCOL
+            2 -> LOCOMOTION
+            3 -> LINE
+            4 -> PROXIMITY
+            5 -> SENSORS
+            6 -> SETTINGS
+            7 -> SCHEDULER
+            8 -> TRACK
+            else -> UNKNOWN
+        }
+    }
+}
+
+/**
+ * What the `track` command asks of the track behaviour.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
+public enum class TrackAction(public val code: Int) {
+    /** Stop the behaviour and the motors. */
+    STOP(0),
+    /** Follow the line, keep the distance, pass the token, drive round obstacles. */
+    START(1),
+    /** Turn round on the spot and go on the other way (still stopped if it was stopped). */
+    REVERSE(2),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
+    public companion object {
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): TrackAction = when (code) {
+            0 -> STOP
+            1 -> START
+            2 -> REVERSE
+            else -> UNKNOWN
+        }
+    }
+}
+
+/**
+ * What the track behaviour is doing.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
+public enum class TrackStatus(public val code: Int) {
+    /** Not running. */
+    OFF(0),
+    /** Following the line at its speed. */
+    FOLLOWING(1),
+    /** A robot close ahead: slowed down or waiting. */
+    KEEPING_DISTANCE(2),
+    /** Driving round an obstacle, off the line. */
+    DETOUR(3),
+    /** Turning round (reverse). */
+    TURNING(4),
+    /** The line is gone: searching for it (sweeps turning on the spot, backs up a little); motors off when the search ended without it, until the line is under the sensor again. */
+    LOST(5),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
+    public companion object {
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): TrackStatus = when (code) {
+            0 -> OFF
+            1 -> FOLLOWING
+            2 -> KEEPING_DISTANCE
+            3 -> DETOUR
+            4 -> TURNING
+            5 -> LOST
+            else -> UNKNOWN
+        }
+    }
+}
+
+/** What the line sensor sees. Bit masks of the fields marked with it. */
+public object LineFlags {
+    /** The line is under the sensor now. */
+    public const val SEEN: Int = 0x01
+    /** The line has not been seen for line_follow.lost_timeout_ms. */
+    public const val LOST: Int = 0x02
+}
+
+/** The status LEDs (indicators.led). Bit masks of the fields marked with it. */
+public object LedFlags {
+    /** Blinks at about 1 Hz while the firmware runs. */
+    public const val ALIVE: Int = 0x01
+    /** The line sensor sees the line. */
+    public const val LINE: Int = 0x02
+    /** The link failsafe stopped the robot. */
+    public const val FAILSAFE: Int = 0x04
+    /** The robot holds the track token (thesis A.3: the orange light). */
+    public const val TOKEN: Int = 0x08
+}
+
+/** What an IR receiver hears. Bit masks of the fields marked with it. */
+public object ProximityFlags {
+    /** The robot's own beacon comes back: something reflects it. */
+    public const val OBSTACLE: Int = 0x01
+    /** Another robot's beacon is heard. */
+    public const val ROBOT: Int = 0x02
 }
 
 /** A packet of the protocol: its type and payload codec. */
@@ -112,7 +387,7 @@ public sealed interface Packet {
 }
 
 /** Gains of a discrete PID controller: u = kp*e + ki*sum(e) + kd*(e - e_prev), the sum clamped to +-i_limit. */
-public data class Pid(
+public class Pid(
     /** proportional gain */
     public val kp: Float,
     /** integral gain (per tick) */
@@ -122,17 +397,28 @@ public data class Pid(
     /** clamp of the integral sum, in error units x ticks */
     public val iLimit: Float,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putF32(at, kp)
         b.putF32(at + 4, ki)
         b.putF32(at + 8, kd)
         b.putF32(at + 12, iLimit)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is Pid && kp.equals(other.kp) && ki.equals(other.ki) && kd.equals(other.kd) && iLimit.equals(other.iLimit)
+    override fun hashCode(): Int {
+        var h = kp.hashCode()
+        h = 31 * h + ki.hashCode()
+        h = 31 * h + kd.hashCode()
+        h = 31 * h + iLimit.hashCode()
+        return h
+    }
+    override fun toString(): String = "Pid(kp=$kp, ki=$ki, kd=$kd, iLimit=$iLimit)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 16
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): Pid {
+        public fun decode(b: ByteArray, at: Int): Pid {
             val kp = b.f32(at)
             val ki = b.f32(at + 4)
             val kd = b.f32(at + 8)
@@ -143,52 +429,72 @@ public data class Pid(
 }
 
 /** What one IR receiver currently sees. */
-public data class ProximitySide(
-    /** bit0 obstacle (own reflection), bit1 robot (message heard) */
+public class ProximitySide(
+    /** what this receiver hears (bits: [ProximityFlags]) */
     public val flags: Int,
     /** id of the last robot heard, 0 if none */
     public val robotId: Int,
     /** which LED of that robot sent it: its orientation relative to us (see [IrLed]) */
-    public val robotLed: Int,
+    public val robotLed: IrLed,
     /** distance class of that robot (see [DistanceClass]) */
-    public val distance: Int,
+    public val distance: DistanceClass,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, flags)
         b.putU8(at + 1, robotId)
-        b.putU8(at + 2, robotLed)
-        b.putU8(at + 3, distance)
+        b.putU8(at + 2, robotLed.code)
+        b.putU8(at + 3, distance.code)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is ProximitySide && flags == other.flags && robotId == other.robotId && robotLed == other.robotLed && distance == other.distance
+    override fun hashCode(): Int {
+        var h = flags.hashCode()
+        h = 31 * h + robotId.hashCode()
+        h = 31 * h + robotLed.hashCode()
+        h = 31 * h + distance.hashCode()
+        return h
+    }
+    override fun toString(): String = "ProximitySide(flags=$flags, robotId=$robotId, robotLed=$robotLed, distance=$distance)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 4
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): ProximitySide {
+        public fun decode(b: ByteArray, at: Int): ProximitySide {
             val flags = b.u8(at)
             val robotId = b.u8(at + 1)
-            val robotLed = b.u8(at + 2)
-            val distance = b.u8(at + 3)
+            val robotLed = IrLed.fromCode(b.u8(at + 2))
+            val distance = DistanceClass.fromCode(b.u8(at + 3))
             return ProximitySide(flags, robotId, robotLed, distance)
         }
     }
 }
 
 /** Who the robot is. */
-public data class SettingsIdentity(
+public class SettingsIdentity(
     /** unique id, also sent in IR messages */
     public val robotId: Int,
     /** user-friendly name */
     public val name: String,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, robotId)
         b.putText(at + 1, name, 16)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsIdentity && robotId == other.robotId && name == other.name
+    override fun hashCode(): Int {
+        var h = robotId.hashCode()
+        h = 31 * h + name.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsIdentity(robotId=$robotId, name=$name)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 17
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsIdentity {
+        public fun decode(b: ByteArray, at: Int): SettingsIdentity {
             val robotId = b.u8(at)
             val name = b.text(at + 1, 16)
             return SettingsIdentity(robotId, name)
@@ -197,21 +503,30 @@ public data class SettingsIdentity(
 }
 
 /** State reflection: what the robot sends on its own, and how often. */
-public data class SettingsSync(
+public class SettingsSync(
     /** full, reduced or no state packets (see [SyncMode]) */
     public val mode: Int,
     /** period of state packets [ms] */
     public val periodMs: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, mode)
         b.putU16(at + 1, periodMs)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsSync && mode == other.mode && periodMs == other.periodMs
+    override fun hashCode(): Int {
+        var h = mode.hashCode()
+        h = 31 * h + periodMs.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsSync(mode=$mode, periodMs=$periodMs)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 3
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsSync {
+        public fun decode(b: ByteArray, at: Int): SettingsSync {
             val mode = b.u8(at)
             val periodMs = b.u16(at + 1)
             return SettingsSync(mode, periodMs)
@@ -220,18 +535,26 @@ public data class SettingsSync(
 }
 
 /** Main loop timing. */
-public data class SettingsScheduler(
+public class SettingsScheduler(
     /** period of the main loop tick [us] */
     public val mainPeriodUs: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU16(at, mainPeriodUs)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsScheduler && mainPeriodUs == other.mainPeriodUs
+    override fun hashCode(): Int {
+        var h = mainPeriodUs.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsScheduler(mainPeriodUs=$mainPeriodUs)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsScheduler {
+        public fun decode(b: ByteArray, at: Int): SettingsScheduler {
             val mainPeriodUs = b.u16(at)
             return SettingsScheduler(mainPeriodUs)
         }
@@ -239,7 +562,7 @@ public data class SettingsScheduler(
 }
 
 /** Three-segment speed profile of movements: accelerate, cruise, brake. */
-public data class SettingsProfile(
+public class SettingsProfile(
     /** acceleration slope [m/s^2] */
     public val accelMps2: Float,
     /** braking slope [m/s^2] */
@@ -247,16 +570,26 @@ public data class SettingsProfile(
     /** speed at start and end of the profile [m/s] */
     public val minSpeedMps: Float,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putF32(at, accelMps2)
         b.putF32(at + 4, decelMps2)
         b.putF32(at + 8, minSpeedMps)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsProfile && accelMps2.equals(other.accelMps2) && decelMps2.equals(other.decelMps2) && minSpeedMps.equals(other.minSpeedMps)
+    override fun hashCode(): Int {
+        var h = accelMps2.hashCode()
+        h = 31 * h + decelMps2.hashCode()
+        h = 31 * h + minSpeedMps.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsProfile(accelMps2=$accelMps2, decelMps2=$decelMps2, minSpeedMps=$minSpeedMps)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 12
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsProfile {
+        public fun decode(b: ByteArray, at: Int): SettingsProfile {
             val accelMps2 = b.f32(at)
             val decelMps2 = b.f32(at + 4)
             val minSpeedMps = b.f32(at + 8)
@@ -266,7 +599,7 @@ public data class SettingsProfile(
 }
 
 /** Line following speeds and behaviour. */
-public data class SettingsLineFollow(
+public class SettingsLineFollow(
     /** cruise speed on black line [m/s] */
     public val speedMps: Float,
     /** speed on red segments (colour mode) [m/s] */
@@ -278,18 +611,30 @@ public data class SettingsLineFollow(
     /** 1: keep following when the host link is lost */
     public val autonomous: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putF32(at, speedMps)
         b.putF32(at + 4, redSpeedMps)
         b.putF32(at + 8, blueSpeedMps)
         b.putU16(at + 12, lostTimeoutMs)
         b.putU8(at + 14, autonomous)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsLineFollow && speedMps.equals(other.speedMps) && redSpeedMps.equals(other.redSpeedMps) && blueSpeedMps.equals(other.blueSpeedMps) && lostTimeoutMs == other.lostTimeoutMs && autonomous == other.autonomous
+    override fun hashCode(): Int {
+        var h = speedMps.hashCode()
+        h = 31 * h + redSpeedMps.hashCode()
+        h = 31 * h + blueSpeedMps.hashCode()
+        h = 31 * h + lostTimeoutMs.hashCode()
+        h = 31 * h + autonomous.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsLineFollow(speedMps=$speedMps, redSpeedMps=$redSpeedMps, blueSpeedMps=$blueSpeedMps, lostTimeoutMs=$lostTimeoutMs, autonomous=$autonomous)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 15
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsLineFollow {
+        public fun decode(b: ByteArray, at: Int): SettingsLineFollow {
             val speedMps = b.f32(at)
             val redSpeedMps = b.f32(at + 4)
             val blueSpeedMps = b.f32(at + 8)
@@ -301,7 +646,7 @@ public data class SettingsLineFollow(
 }
 
 /** Line sensor calibration: per-spot ambient-suppressed readings of white (min) and black (max). */
-public data class SettingsLineSensor(
+public class SettingsLineSensor(
     /** reading over white [adc] */
     public val calMin: List<Int>,
     /** reading over black [adc] */
@@ -309,16 +654,26 @@ public data class SettingsLineSensor(
     /** calibrated darkness above which a spot sees the line [permille] */
     public val threshold: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         intsOf(calMin, 8, "cal_min").let { a -> for (i in 0 until 8) b.putU16(at + 2 * i, a[i]) }
         intsOf(calMax, 8, "cal_max").let { a -> for (i in 0 until 8) b.putU16(at + 16 + 2 * i, a[i]) }
         b.putU16(at + 32, threshold)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsLineSensor && calMin == other.calMin && calMax == other.calMax && threshold == other.threshold
+    override fun hashCode(): Int {
+        var h = calMin.hashCode()
+        h = 31 * h + calMax.hashCode()
+        h = 31 * h + threshold.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsLineSensor(calMin=$calMin, calMax=$calMax, threshold=$threshold)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 34
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsLineSensor {
+        public fun decode(b: ByteArray, at: Int): SettingsLineSensor {
             val calMin = IntArrayList(IntArray(8) { b.u16(at + 2 * it) })
             val calMax = IntArrayList(IntArray(8) { b.u16(at + 16 + 2 * it) })
             val threshold = b.u16(at + 32)
@@ -328,21 +683,30 @@ public data class SettingsLineSensor(
 }
 
 /** Wheel encoders and speed measurement by fixed delta-s. */
-public data class SettingsEncoder(
+public class SettingsEncoder(
     /** encoder pulses per wheel revolution */
     public val pulsesPerRev: Int,
     /** speed reads zero after no pulse this long [ms] */
     public val speedTimeoutMs: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU16(at, pulsesPerRev)
         b.putU16(at + 2, speedTimeoutMs)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsEncoder && pulsesPerRev == other.pulsesPerRev && speedTimeoutMs == other.speedTimeoutMs
+    override fun hashCode(): Int {
+        var h = pulsesPerRev.hashCode()
+        h = 31 * h + speedTimeoutMs.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsEncoder(pulsesPerRev=$pulsesPerRev, speedTimeoutMs=$speedTimeoutMs)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 4
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsEncoder {
+        public fun decode(b: ByteArray, at: Int): SettingsEncoder {
             val pulsesPerRev = b.u16(at)
             val speedTimeoutMs = b.u16(at + 2)
             return SettingsEncoder(pulsesPerRev, speedTimeoutMs)
@@ -351,21 +715,30 @@ public data class SettingsEncoder(
 }
 
 /** Robot geometry, used by locomotion and host odometry. */
-public data class SettingsGeometry(
+public class SettingsGeometry(
     /** wheel diameter [m] */
     public val wheelDiameterM: Float,
     /** distance between the wheels (gauge) [m] */
     public val wheelBaseM: Float,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putF32(at, wheelDiameterM)
         b.putF32(at + 4, wheelBaseM)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsGeometry && wheelDiameterM.equals(other.wheelDiameterM) && wheelBaseM.equals(other.wheelBaseM)
+    override fun hashCode(): Int {
+        var h = wheelDiameterM.hashCode()
+        h = 31 * h + wheelBaseM.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsGeometry(wheelDiameterM=$wheelDiameterM, wheelBaseM=$wheelBaseM)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsGeometry {
+        public fun decode(b: ByteArray, at: Int): SettingsGeometry {
             val wheelDiameterM = b.f32(at)
             val wheelBaseM = b.f32(at + 4)
             return SettingsGeometry(wheelDiameterM, wheelBaseM)
@@ -374,18 +747,26 @@ public data class SettingsGeometry(
 }
 
 /** Motor drive limits. */
-public data class SettingsMotors(
+public class SettingsMotors(
     /** largest PWM duty the controllers may command [permille] */
     public val pwmLimit: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU16(at, pwmLimit)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsMotors && pwmLimit == other.pwmLimit
+    override fun hashCode(): Int {
+        var h = pwmLimit.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsMotors(pwmLimit=$pwmLimit)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsMotors {
+        public fun decode(b: ByteArray, at: Int): SettingsMotors {
             val pwmLimit = b.u16(at)
             return SettingsMotors(pwmLimit)
         }
@@ -393,7 +774,7 @@ public data class SettingsMotors(
 }
 
 /** IR proximity: beacons to other robots and obstacle detection. */
-public data class SettingsProximity(
+public class SettingsProximity(
     /** highest beacon power; 0 turns the beacon off [percent] */
     public val irPower: Int,
     /** period of IR beacons [ms] */
@@ -401,16 +782,26 @@ public data class SettingsProximity(
     /** how long a sighting stays in the state [ms] */
     public val holdMs: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, irPower)
         b.putU16(at + 1, beaconPeriodMs)
         b.putU16(at + 3, holdMs)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsProximity && irPower == other.irPower && beaconPeriodMs == other.beaconPeriodMs && holdMs == other.holdMs
+    override fun hashCode(): Int {
+        var h = irPower.hashCode()
+        h = 31 * h + beaconPeriodMs.hashCode()
+        h = 31 * h + holdMs.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsProximity(irPower=$irPower, beaconPeriodMs=$beaconPeriodMs, holdMs=$holdMs)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 5
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsProximity {
+        public fun decode(b: ByteArray, at: Int): SettingsProximity {
             val irPower = b.u8(at)
             val beaconPeriodMs = b.u16(at + 1)
             val holdMs = b.u16(at + 3)
@@ -419,19 +810,64 @@ public data class SettingsProximity(
     }
 }
 
+/** The track behaviour (thesis A.3): decentralized line following with distance keeping, a token passed between robots, detours round obstacles. */
+public class SettingsTrack(
+    /** cruise speed on the line [m/s] */
+    public val speedMps: Float,
+    /** the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead [percent] */
+    public val tokenBoostPercent: Int,
+    /** the robot with this id creates the token at its first start; 0: none does */
+    public val tokenOriginId: Int,
+) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
+        b.putF32(at, speedMps)
+        b.putU8(at + 4, tokenBoostPercent)
+        b.putU8(at + 5, tokenOriginId)
+    }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsTrack && speedMps.equals(other.speedMps) && tokenBoostPercent == other.tokenBoostPercent && tokenOriginId == other.tokenOriginId
+    override fun hashCode(): Int {
+        var h = speedMps.hashCode()
+        h = 31 * h + tokenBoostPercent.hashCode()
+        h = 31 * h + tokenOriginId.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsTrack(speedMps=$speedMps, tokenBoostPercent=$tokenBoostPercent, tokenOriginId=$tokenOriginId)"
+    public companion object {
+        /** Encoded size in bytes. */
+        public const val SIZE: Int = 6
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        public fun decode(b: ByteArray, at: Int): SettingsTrack {
+            val speedMps = b.f32(at)
+            val tokenBoostPercent = b.u8(at + 4)
+            val tokenOriginId = b.u8(at + 5)
+            return SettingsTrack(speedMps, tokenBoostPercent, tokenOriginId)
+        }
+    }
+}
+
 /** Host link supervision. */
-public data class SettingsLink(
+public class SettingsLink(
     /** stop host-driven motion after this long without a packet; 0 = off [ms] */
     public val failsafeTimeoutMs: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU16(at, failsafeTimeoutMs)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsLink && failsafeTimeoutMs == other.failsafeTimeoutMs
+    override fun hashCode(): Int {
+        var h = failsafeTimeoutMs.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsLink(failsafeTimeoutMs=$failsafeTimeoutMs)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsLink {
+        public fun decode(b: ByteArray, at: Int): SettingsLink {
             val failsafeTimeoutMs = b.u16(at)
             return SettingsLink(failsafeTimeoutMs)
         }
@@ -439,18 +875,26 @@ public data class SettingsLink(
 }
 
 /** Debug text sent to the host. */
-public data class SettingsDebug(
+public class SettingsDebug(
     /** 0 off, 1 errors, 2 info, 3 verbose, 4 trace */
     public val level: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, level)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsDebug && level == other.level
+    override fun hashCode(): Int {
+        var h = level.hashCode()
+        return h
+    }
+    override fun toString(): String = "SettingsDebug(level=$level)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 1
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): SettingsDebug {
+        public fun decode(b: ByteArray, at: Int): SettingsDebug {
             val level = b.u8(at)
             return SettingsDebug(level)
         }
@@ -458,48 +902,72 @@ public data class SettingsDebug(
 }
 
 /** Robot clock and main loop health. */
-public data class StateTime(
+public class StateTime(
     /** robot time since reset [ms] */
     public val timeMs: Long,
     /** longest main loop tick since the last state packet [us] */
     public val tickMaxUs: Int,
-    /** main loop ticks that overran their period */
+    /** main loop ticks that overran their period (since reset) */
     public val overruns: Int,
+    /** robot time of the latest overrun, 0 if none [ms] */
+    public val lastOverrunMs: Long,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU32(at, timeMs)
         b.putU16(at + 4, tickMaxUs)
         b.putU16(at + 6, overruns)
+        b.putU32(at + 8, lastOverrunMs)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateTime && timeMs == other.timeMs && tickMaxUs == other.tickMaxUs && overruns == other.overruns && lastOverrunMs == other.lastOverrunMs
+    override fun hashCode(): Int {
+        var h = timeMs.hashCode()
+        h = 31 * h + tickMaxUs.hashCode()
+        h = 31 * h + overruns.hashCode()
+        h = 31 * h + lastOverrunMs.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateTime(timeMs=$timeMs, tickMaxUs=$tickMaxUs, overruns=$overruns, lastOverrunMs=$lastOverrunMs)"
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 8
+        public const val SIZE: Int = 12
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateTime {
+        public fun decode(b: ByteArray, at: Int): StateTime {
             val timeMs = b.u32(at)
             val tickMaxUs = b.u16(at + 4)
             val overruns = b.u16(at + 6)
-            return StateTime(timeMs, tickMaxUs, overruns)
+            val lastOverrunMs = b.u32(at + 8)
+            return StateTime(timeMs, tickMaxUs, overruns, lastOverrunMs)
         }
     }
 }
 
 /** Total encoder pulse counts since reset (signed: backwards counts down). */
-public data class StateEncoders(
+public class StateEncoders(
     /** left wheel [pulses] */
     public val left: Int,
     /** right wheel [pulses] */
     public val right: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putI32(at, left)
         b.putI32(at + 4, right)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateEncoders && left == other.left && right == other.right
+    override fun hashCode(): Int {
+        var h = left.hashCode()
+        h = 31 * h + right.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateEncoders(left=$left, right=$right)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateEncoders {
+        public fun decode(b: ByteArray, at: Int): StateEncoders {
             val left = b.i32(at)
             val right = b.i32(at + 4)
             return StateEncoders(left, right)
@@ -508,7 +976,7 @@ public data class StateEncoders(
 }
 
 /** Measured wheel speeds and the PWM driving the motors. */
-public data class StateWheels(
+public class StateWheels(
     /** left wheel speed [mm/s] */
     public val speedLeftMmps: Int,
     /** right wheel speed [mm/s] */
@@ -518,17 +986,28 @@ public data class StateWheels(
     /** right motor duty, -1000..1000 [permille] */
     public val pwmRight: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putI16(at, speedLeftMmps)
         b.putI16(at + 2, speedRightMmps)
         b.putI16(at + 4, pwmLeft)
         b.putI16(at + 6, pwmRight)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateWheels && speedLeftMmps == other.speedLeftMmps && speedRightMmps == other.speedRightMmps && pwmLeft == other.pwmLeft && pwmRight == other.pwmRight
+    override fun hashCode(): Int {
+        var h = speedLeftMmps.hashCode()
+        h = 31 * h + speedRightMmps.hashCode()
+        h = 31 * h + pwmLeft.hashCode()
+        h = 31 * h + pwmRight.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateWheels(speedLeftMmps=$speedLeftMmps, speedRightMmps=$speedRightMmps, pwmLeft=$pwmLeft, pwmRight=$pwmRight)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateWheels {
+        public fun decode(b: ByteArray, at: Int): StateWheels {
             val speedLeftMmps = b.i16(at)
             val speedRightMmps = b.i16(at + 2)
             val pwmLeft = b.i16(at + 4)
@@ -539,24 +1018,34 @@ public data class StateWheels(
 }
 
 /** Line sensor: eight ambient-suppressed spot readings and the line position. */
-public data class StateLine(
+public class StateLine(
     /** lit minus dark reading per spot, left to right [adc] */
     public val raw: List<Int>,
     /** line position, -1000 far left .. 1000 far right [permille] */
     public val position: Int,
-    /** bit0 line seen, bit1 line lost (timeout) */
+    /** line seen, line lost (bits: [LineFlags]) */
     public val flags: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         intsOf(raw, 8, "raw").let { a -> for (i in 0 until 8) b.putU16(at + 2 * i, a[i]) }
         b.putI16(at + 16, position)
         b.putU8(at + 18, flags)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateLine && raw == other.raw && position == other.position && flags == other.flags
+    override fun hashCode(): Int {
+        var h = raw.hashCode()
+        h = 31 * h + position.hashCode()
+        h = 31 * h + flags.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateLine(raw=$raw, position=$position, flags=$flags)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 19
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateLine {
+        public fun decode(b: ByteArray, at: Int): StateLine {
             val raw = IntArrayList(IntArray(8) { b.u16(at + 2 * it) })
             val position = b.i16(at + 16)
             val flags = b.u8(at + 18)
@@ -566,44 +1055,62 @@ public data class StateLine(
 }
 
 /** Line follower status. */
-public data class StateLineFollow(
+public class StateLineFollow(
     /** off, following or lost (see [LineFollowStatus]) */
-    public val status: Int,
+    public val status: LineFollowStatus,
     /** colour of the segment under the robot (see [Colour]) */
-    public val segment: Int,
+    public val segment: Colour,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
-        b.putU8(at, status)
-        b.putU8(at + 1, segment)
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, status.code)
+        b.putU8(at + 1, segment.code)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateLineFollow && status == other.status && segment == other.segment
+    override fun hashCode(): Int {
+        var h = status.hashCode()
+        h = 31 * h + segment.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateLineFollow(status=$status, segment=$segment)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateLineFollow {
-            val status = b.u8(at)
-            val segment = b.u8(at + 1)
+        public fun decode(b: ByteArray, at: Int): StateLineFollow {
+            val status = LineFollowStatus.fromCode(b.u8(at))
+            val segment = Colour.fromCode(b.u8(at + 1))
             return StateLineFollow(status, segment)
         }
     }
 }
 
 /** IR proximity, front and rear receivers. */
-public data class StateProximity(
+public class StateProximity(
     /** front receiver */
     public val front: ProximitySide,
     /** rear receiver */
     public val rear: ProximitySide,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         front.encodeTo(b, at)
         rear.encodeTo(b, at + 4)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateProximity && front == other.front && rear == other.rear
+    override fun hashCode(): Int {
+        var h = front.hashCode()
+        h = 31 * h + rear.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateProximity(front=$front, rear=$rear)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 8
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateProximity {
+        public fun decode(b: ByteArray, at: Int): StateProximity {
             val front = ProximitySide.decode(b, at)
             val rear = ProximitySide.decode(b, at + 4)
             return StateProximity(front, rear)
@@ -612,7 +1119,7 @@ public data class StateProximity(
 }
 
 /** Colour sensor under the robot. */
-public data class StateColour(
+public class StateColour(
     /** red channel, 0..255 */
     public val red: Int,
     /** green channel, 0..255 */
@@ -622,32 +1129,44 @@ public data class StateColour(
     /** clear channel, 0..255 */
     public val clear: Int,
     /** classified colour (see [Colour]) */
-    public val detected: Int,
+    public val detected: Colour,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, red)
         b.putU8(at + 1, green)
         b.putU8(at + 2, blue)
         b.putU8(at + 3, clear)
-        b.putU8(at + 4, detected)
+        b.putU8(at + 4, detected.code)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateColour && red == other.red && green == other.green && blue == other.blue && clear == other.clear && detected == other.detected
+    override fun hashCode(): Int {
+        var h = red.hashCode()
+        h = 31 * h + green.hashCode()
+        h = 31 * h + blue.hashCode()
+        h = 31 * h + clear.hashCode()
+        h = 31 * h + detected.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateColour(red=$red, green=$green, blue=$blue, clear=$clear, detected=$detected)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 5
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateColour {
+        public fun decode(b: ByteArray, at: Int): StateColour {
             val red = b.u8(at)
             val green = b.u8(at + 1)
             val blue = b.u8(at + 2)
             val clear = b.u8(at + 3)
-            val detected = b.u8(at + 4)
+            val detected = Colour.fromCode(b.u8(at + 4))
             return StateColour(red, green, blue, clear, detected)
         }
     }
 }
 
 /** Accelerometer. */
-public data class StateAccel(
+public class StateAccel(
     /** forward [mg] */
     public val xMg: Int,
     /** left [mg] */
@@ -655,16 +1174,26 @@ public data class StateAccel(
     /** up [mg] */
     public val zMg: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putI16(at, xMg)
         b.putI16(at + 2, yMg)
         b.putI16(at + 4, zMg)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateAccel && xMg == other.xMg && yMg == other.yMg && zMg == other.zMg
+    override fun hashCode(): Int {
+        var h = xMg.hashCode()
+        h = 31 * h + yMg.hashCode()
+        h = 31 * h + zMg.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateAccel(xMg=$xMg, yMg=$yMg, zMg=$zMg)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 6
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateAccel {
+        public fun decode(b: ByteArray, at: Int): StateAccel {
             val xMg = b.i16(at)
             val yMg = b.i16(at + 2)
             val zMg = b.i16(at + 4)
@@ -674,7 +1203,7 @@ public data class StateAccel(
 }
 
 /** Battery and MCU. */
-public data class StatePower(
+public class StatePower(
     /** battery voltage [mV] */
     public val batteryMv: Int,
     /** current drawn [mA] */
@@ -682,16 +1211,26 @@ public data class StatePower(
     /** MCU core temperature [0.1 degC] */
     public val mcuTempDc: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU16(at, batteryMv)
         b.putU16(at + 2, currentMa)
         b.putI16(at + 4, mcuTempDc)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StatePower && batteryMv == other.batteryMv && currentMa == other.currentMa && mcuTempDc == other.mcuTempDc
+    override fun hashCode(): Int {
+        var h = batteryMv.hashCode()
+        h = 31 * h + currentMa.hashCode()
+        h = 31 * h + mcuTempDc.hashCode()
+        return h
+    }
+    override fun toString(): String = "StatePower(batteryMv=$batteryMv, currentMa=$currentMa, mcuTempDc=$mcuTempDc)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 6
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StatePower {
+        public fun decode(b: ByteArray, at: Int): StatePower {
             val batteryMv = b.u16(at)
             val currentMa = b.u16(at + 2)
             val mcuTempDc = b.i16(at + 4)
@@ -701,21 +1240,30 @@ public data class StatePower(
 }
 
 /** LEDs and IR transmit power. */
-public data class StateIndicators(
-    /** status LED bitmask */
+public class StateIndicators(
+    /** status LED bitmask (bits: [LedFlags]) */
     public val led: Int,
     /** power of the last IR beacon [percent] */
     public val irPower: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, led)
         b.putU8(at + 1, irPower)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateIndicators && led == other.led && irPower == other.irPower
+    override fun hashCode(): Int {
+        var h = led.hashCode()
+        h = 31 * h + irPower.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateIndicators(led=$led, irPower=$irPower)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 2
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateIndicators {
+        public fun decode(b: ByteArray, at: Int): StateIndicators {
             val led = b.u8(at)
             val irPower = b.u8(at + 1)
             return StateIndicators(led, irPower)
@@ -724,28 +1272,39 @@ public data class StateIndicators(
 }
 
 /** Movement queue and what drives the motors. */
-public data class StateLocomotion(
+public class StateLocomotion(
     /** idle, movement, teleop, line_follow, failsafe (see [LocoMode]) */
-    public val mode: Int,
+    public val mode: LocoMode,
     /** movements waiting, including the running one */
     public val queueLength: Int,
     /** id of the running movement, 0 if none */
     public val currentId: Int,
-    /** id of the last finished movement, 0 if none */
+    /** id of the last movement that ran to its end (outcome finished), 0 if none */
     public val finishedId: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
-        b.putU8(at, mode)
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, mode.code)
         b.putU8(at + 1, queueLength)
         b.putU16(at + 2, currentId)
         b.putU16(at + 4, finishedId)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateLocomotion && mode == other.mode && queueLength == other.queueLength && currentId == other.currentId && finishedId == other.finishedId
+    override fun hashCode(): Int {
+        var h = mode.hashCode()
+        h = 31 * h + queueLength.hashCode()
+        h = 31 * h + currentId.hashCode()
+        h = 31 * h + finishedId.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateLocomotion(mode=$mode, queueLength=$queueLength, currentId=$currentId, finishedId=$finishedId)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 6
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateLocomotion {
-            val mode = b.u8(at)
+        public fun decode(b: ByteArray, at: Int): StateLocomotion {
+            val mode = LocoMode.fromCode(b.u8(at))
             val queueLength = b.u8(at + 1)
             val currentId = b.u16(at + 2)
             val finishedId = b.u16(at + 4)
@@ -754,31 +1313,85 @@ public data class StateLocomotion(
     }
 }
 
+/** The track behaviour (thesis A.3). */
+public class StateTrack(
+    /** what the behaviour is doing (see [TrackStatus]) */
+    public val status: TrackStatus,
+    /** 1 while this robot holds the token (also LED `token`) */
+    public val token: Int,
+    /** times the token came to this robot from another robot since reset */
+    public val tokenVisits: Int,
+    /** the robot met last: heard close by IR and greeted with an IR message; 0 if none */
+    public val metId: Int,
+) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, status.code)
+        b.putU8(at + 1, token)
+        b.putU16(at + 2, tokenVisits)
+        b.putU8(at + 4, metId)
+    }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateTrack && status == other.status && token == other.token && tokenVisits == other.tokenVisits && metId == other.metId
+    override fun hashCode(): Int {
+        var h = status.hashCode()
+        h = 31 * h + token.hashCode()
+        h = 31 * h + tokenVisits.hashCode()
+        h = 31 * h + metId.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateTrack(status=$status, token=$token, tokenVisits=$tokenVisits, metId=$metId)"
+    public companion object {
+        /** Encoded size in bytes. */
+        public const val SIZE: Int = 5
+        /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
+        public fun decode(b: ByteArray, at: Int): StateTrack {
+            val status = TrackStatus.fromCode(b.u8(at))
+            val token = b.u8(at + 1)
+            val tokenVisits = b.u16(at + 2)
+            val metId = b.u8(at + 4)
+            return StateTrack(status, token, tokenVisits, metId)
+        }
+    }
+}
+
 /** Link error counters since reset. */
-public data class StateErrors(
-    /** frames dropped for a bad CRC */
+public class StateErrors(
+    /** frames whose CRC failed */
     public val crc: Int,
-    /** frames dropped for bad SLIP, too short or too long */
+    /** runs of received bytes (between two ENDs) that made no frame: bad SLIP, shorter than 5 or longer than 125 bytes */
     public val framing: Int,
-    /** packets refused: unknown type, bad length, bad argument */
+    /** frames with a sound CRC that were refused, for any reason */
     public val rejected: Int,
     /** bytes lost to a full receive buffer */
     public val rxOverflow: Int,
     /** packets not sent because the transmit buffer was full */
     public val txDropped: Int,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         b.putU16(at, crc)
         b.putU16(at + 2, framing)
         b.putU16(at + 4, rejected)
         b.putU16(at + 6, rxOverflow)
         b.putU16(at + 8, txDropped)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is StateErrors && crc == other.crc && framing == other.framing && rejected == other.rejected && rxOverflow == other.rxOverflow && txDropped == other.txDropped
+    override fun hashCode(): Int {
+        var h = crc.hashCode()
+        h = 31 * h + framing.hashCode()
+        h = 31 * h + rejected.hashCode()
+        h = 31 * h + rxOverflow.hashCode()
+        h = 31 * h + txDropped.hashCode()
+        return h
+    }
+    override fun toString(): String = "StateErrors(crc=$crc, framing=$framing, rejected=$rejected, rxOverflow=$rxOverflow, txDropped=$txDropped)"
     public companion object {
         /** Encoded size in bytes. */
         public const val SIZE: Int = 10
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): StateErrors {
+        public fun decode(b: ByteArray, at: Int): StateErrors {
             val crc = b.u16(at)
             val framing = b.u16(at + 2)
             val rejected = b.u16(at + 4)
@@ -790,7 +1403,7 @@ public data class StateErrors(
 }
 
 /** Every sensor and status, mirrored robot -> host. */
-public data class RobotState(
+public class RobotState(
     /** Robot clock and main loop health. */
     public val time: StateTime,
     /** Total encoder pulse counts since reset (signed: backwards counts down). */
@@ -813,47 +1426,71 @@ public data class RobotState(
     public val indicators: StateIndicators,
     /** Movement queue and what drives the motors. */
     public val locomotion: StateLocomotion,
+    /** The track behaviour (thesis A.3). */
+    public val track: StateTrack,
     /** Link error counters since reset. */
     public val errors: StateErrors,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         time.encodeTo(b, at)
-        encoders.encodeTo(b, at + 8)
-        wheels.encodeTo(b, at + 16)
-        line.encodeTo(b, at + 24)
-        lineFollow.encodeTo(b, at + 43)
-        proximity.encodeTo(b, at + 45)
-        colour.encodeTo(b, at + 53)
-        accel.encodeTo(b, at + 58)
-        power.encodeTo(b, at + 64)
-        indicators.encodeTo(b, at + 70)
-        locomotion.encodeTo(b, at + 72)
-        errors.encodeTo(b, at + 78)
+        encoders.encodeTo(b, at + 12)
+        wheels.encodeTo(b, at + 20)
+        line.encodeTo(b, at + 28)
+        lineFollow.encodeTo(b, at + 47)
+        proximity.encodeTo(b, at + 49)
+        colour.encodeTo(b, at + 57)
+        accel.encodeTo(b, at + 62)
+        power.encodeTo(b, at + 68)
+        indicators.encodeTo(b, at + 74)
+        locomotion.encodeTo(b, at + 76)
+        track.encodeTo(b, at + 82)
+        errors.encodeTo(b, at + 87)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is RobotState && time == other.time && encoders == other.encoders && wheels == other.wheels && line == other.line && lineFollow == other.lineFollow && proximity == other.proximity && colour == other.colour && accel == other.accel && power == other.power && indicators == other.indicators && locomotion == other.locomotion && track == other.track && errors == other.errors
+    override fun hashCode(): Int {
+        var h = time.hashCode()
+        h = 31 * h + encoders.hashCode()
+        h = 31 * h + wheels.hashCode()
+        h = 31 * h + line.hashCode()
+        h = 31 * h + lineFollow.hashCode()
+        h = 31 * h + proximity.hashCode()
+        h = 31 * h + colour.hashCode()
+        h = 31 * h + accel.hashCode()
+        h = 31 * h + power.hashCode()
+        h = 31 * h + indicators.hashCode()
+        h = 31 * h + locomotion.hashCode()
+        h = 31 * h + track.hashCode()
+        h = 31 * h + errors.hashCode()
+        return h
+    }
+    override fun toString(): String = "RobotState(time=$time, encoders=$encoders, wheels=$wheels, line=$line, lineFollow=$lineFollow, proximity=$proximity, colour=$colour, accel=$accel, power=$power, indicators=$indicators, locomotion=$locomotion, track=$track, errors=$errors)"
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 88
+        public const val SIZE: Int = 97
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): RobotState {
+        public fun decode(b: ByteArray, at: Int): RobotState {
             val time = StateTime.decode(b, at)
-            val encoders = StateEncoders.decode(b, at + 8)
-            val wheels = StateWheels.decode(b, at + 16)
-            val line = StateLine.decode(b, at + 24)
-            val lineFollow = StateLineFollow.decode(b, at + 43)
-            val proximity = StateProximity.decode(b, at + 45)
-            val colour = StateColour.decode(b, at + 53)
-            val accel = StateAccel.decode(b, at + 58)
-            val power = StatePower.decode(b, at + 64)
-            val indicators = StateIndicators.decode(b, at + 70)
-            val locomotion = StateLocomotion.decode(b, at + 72)
-            val errors = StateErrors.decode(b, at + 78)
-            return RobotState(time, encoders, wheels, line, lineFollow, proximity, colour, accel, power, indicators, locomotion, errors)
+            val encoders = StateEncoders.decode(b, at + 12)
+            val wheels = StateWheels.decode(b, at + 20)
+            val line = StateLine.decode(b, at + 28)
+            val lineFollow = StateLineFollow.decode(b, at + 47)
+            val proximity = StateProximity.decode(b, at + 49)
+            val colour = StateColour.decode(b, at + 57)
+            val accel = StateAccel.decode(b, at + 62)
+            val power = StatePower.decode(b, at + 68)
+            val indicators = StateIndicators.decode(b, at + 74)
+            val locomotion = StateLocomotion.decode(b, at + 76)
+            val track = StateTrack.decode(b, at + 82)
+            val errors = StateErrors.decode(b, at + 87)
+            return RobotState(time, encoders, wheels, line, lineFollow, proximity, colour, accel, power, indicators, locomotion, track, errors)
         }
     }
 }
 
 /** All module settings, mirrored host -> robot. */
-public data class Settings(
+public class Settings(
     /** Who the robot is. */
     public val identity: SettingsIdentity,
     /** State reflection: what the robot sends on its own, and how often. */
@@ -882,12 +1519,15 @@ public data class Settings(
     public val motors: SettingsMotors,
     /** IR proximity: beacons to other robots and obstacle detection. */
     public val proximity: SettingsProximity,
+    /** The track behaviour (thesis A.3): decentralized line following with distance keeping, a token passed between robots, detours round obstacles. */
+    public val track: SettingsTrack,
     /** Host link supervision. */
     public val link: SettingsLink,
     /** Debug text sent to the host. */
     public val debug: SettingsDebug,
 ) {
-    internal fun encodeTo(b: ByteArray, at: Int) {
+    /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
+    public fun encodeTo(b: ByteArray, at: Int) {
         identity.encodeTo(b, at)
         sync.encodeTo(b, at + 17)
         scheduler.encodeTo(b, at + 20)
@@ -902,14 +1542,38 @@ public data class Settings(
         geometry.encodeTo(b, at + 151)
         motors.encodeTo(b, at + 159)
         proximity.encodeTo(b, at + 161)
-        link.encodeTo(b, at + 166)
-        debug.encodeTo(b, at + 168)
+        track.encodeTo(b, at + 166)
+        link.encodeTo(b, at + 172)
+        debug.encodeTo(b, at + 174)
     }
+    override fun equals(other: Any?): Boolean =
+        this === other || other is Settings && identity == other.identity && sync == other.sync && scheduler == other.scheduler && speedPid == other.speedPid && wheelPid == other.wheelPid && wheelBalance == other.wheelBalance && linePid == other.linePid && profile == other.profile && lineFollow == other.lineFollow && lineSensor == other.lineSensor && encoder == other.encoder && geometry == other.geometry && motors == other.motors && proximity == other.proximity && track == other.track && link == other.link && debug == other.debug
+    override fun hashCode(): Int {
+        var h = identity.hashCode()
+        h = 31 * h + sync.hashCode()
+        h = 31 * h + scheduler.hashCode()
+        h = 31 * h + speedPid.hashCode()
+        h = 31 * h + wheelPid.hashCode()
+        h = 31 * h + wheelBalance.hashCode()
+        h = 31 * h + linePid.hashCode()
+        h = 31 * h + profile.hashCode()
+        h = 31 * h + lineFollow.hashCode()
+        h = 31 * h + lineSensor.hashCode()
+        h = 31 * h + encoder.hashCode()
+        h = 31 * h + geometry.hashCode()
+        h = 31 * h + motors.hashCode()
+        h = 31 * h + proximity.hashCode()
+        h = 31 * h + track.hashCode()
+        h = 31 * h + link.hashCode()
+        h = 31 * h + debug.hashCode()
+        return h
+    }
+    override fun toString(): String = "Settings(identity=$identity, sync=$sync, scheduler=$scheduler, speedPid=$speedPid, wheelPid=$wheelPid, wheelBalance=$wheelBalance, linePid=$linePid, profile=$profile, lineFollow=$lineFollow, lineSensor=$lineSensor, encoder=$encoder, geometry=$geometry, motors=$motors, proximity=$proximity, track=$track, link=$link, debug=$debug)"
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 169
+        public const val SIZE: Int = 175
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
-        internal fun decode(b: ByteArray, at: Int): Settings {
+        public fun decode(b: ByteArray, at: Int): Settings {
             val identity = SettingsIdentity.decode(b, at)
             val sync = SettingsSync.decode(b, at + 17)
             val scheduler = SettingsScheduler.decode(b, at + 20)
@@ -924,14 +1588,15 @@ public data class Settings(
             val geometry = SettingsGeometry.decode(b, at + 151)
             val motors = SettingsMotors.decode(b, at + 159)
             val proximity = SettingsProximity.decode(b, at + 161)
-            val link = SettingsLink.decode(b, at + 166)
-            val debug = SettingsDebug.decode(b, at + 168)
-            return Settings(identity, sync, scheduler, speedPid, wheelPid, wheelBalance, linePid, profile, lineFollow, lineSensor, encoder, geometry, motors, proximity, link, debug)
+            val track = SettingsTrack.decode(b, at + 166)
+            val link = SettingsLink.decode(b, at + 172)
+            val debug = SettingsDebug.decode(b, at + 174)
+            return Settings(identity, sync, scheduler, speedPid, wheelPid, wheelBalance, linePid, profile, lineFollow, lineSensor, encoder, geometry, motors, proximity, track, link, debug)
         }
     }
 }
 
-/** Identity, sent on connect, at reset and in answer to `hello_request`. */
+/** Identity and session, sent at reset and in answer to `hello_request`. */
 public data class Hello(
     /** settings.identity.robot_id */
     public val robotId: Int,
@@ -951,10 +1616,14 @@ public data class Hello(
     public val settingsSize: Int,
     /** sizeof(robot_state) [bytes] */
     public val stateSize: Int,
+    /** 1: the hello_request named the session the robot already served (its duplicate history is this host's); 0: a new session, and in the hello sent at reset */
+    public val sessionResumed: Int,
+    /** CRC-16/CCITT-FALSE of the settings struct as it is now: equal to a cached copy's CRC, the cache is current */
+    public val settingsCrc: Int,
 ) : Packet {
     override val type: Int get() = 1
     /** Encoded payload size in bytes. */
-    internal val payloadSize: Int get() = 30
+    internal val payloadSize: Int get() = 33
     internal fun encodeTo(b: ByteArray, at: Int) {
         b.putU8(at, robotId)
         b.putText(at + 1, name, 16)
@@ -965,14 +1634,16 @@ public data class Hello(
         b.putU32(at + 22, layoutHash)
         b.putU16(at + 26, settingsSize)
         b.putU16(at + 28, stateSize)
+        b.putU8(at + 30, sessionResumed)
+        b.putU16(at + 31, settingsCrc)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 30
+        public const val SIZE: Int = 33
         /** Packet type. */
         public const val TYPE: Int = 1
-        internal const val PAYLOAD_SIZE_MAX: Int = 30
+        internal const val PAYLOAD_SIZE_MAX: Int = 33
         /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
         @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
         internal fun decode(b: ByteArray, at: Int, end: Int): Hello {
@@ -985,7 +1656,9 @@ public data class Hello(
             val layoutHash = b.u32(at + 22)
             val settingsSize = b.u16(at + 26)
             val stateSize = b.u16(at + 28)
-            return Hello(robotId, name, fwMajor, fwMinor, fwPatch, protocolVersion, layoutHash, settingsSize, stateSize)
+            val sessionResumed = b.u8(at + 30)
+            val settingsCrc = b.u16(at + 31)
+            return Hello(robotId, name, fwMajor, fwMinor, fwPatch, protocolVersion, layoutHash, settingsSize, stateSize, sessionResumed, settingsCrc)
         }
     }
 }
@@ -997,17 +1670,17 @@ public data class StateFull(
 ) : Packet {
     override val type: Int get() = 2
     /** Encoded payload size in bytes. */
-    internal val payloadSize: Int get() = 88
+    internal val payloadSize: Int get() = 97
     internal fun encodeTo(b: ByteArray, at: Int) {
         state.encodeTo(b, at)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 88
+        public const val SIZE: Int = 97
         /** Packet type. */
         public const val TYPE: Int = 2
-        internal const val PAYLOAD_SIZE_MAX: Int = 88
+        internal const val PAYLOAD_SIZE_MAX: Int = 97
         /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
         @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
         internal fun decode(b: ByteArray, at: Int, end: Int): StateFull {
@@ -1031,7 +1704,7 @@ public data class StateReduced(
     public val speedRightMmps: Int,
     /** line position [permille] */
     public val linePosition: Int,
-    /** line.flags */
+    /** line.flags (bits: [LineFlags]) */
     public val lineFlags: Int,
 ) : Packet {
     override val type: Int get() = 3
@@ -1141,6 +1814,9 @@ public class SettingsData(
     /** settings bytes */
     public val data: ByteArray,
 ) : Packet {
+    init {
+        require(data.size in 0..64) { "data: ${data.size} bytes, not 0..64" }
+    }
     override val type: Int get() = 6
     /** Encoded payload size in bytes. */
     internal val payloadSize: Int get() = 3 + data.size
@@ -1150,8 +1826,13 @@ public class SettingsData(
         data.copyInto(b, at + 3)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
-    override fun equals(other: Any?): Boolean = other is SettingsData && offset == other.offset && data.contentEquals(other.data)
-    override fun hashCode(): Int = 1 * offset.hashCode() + 31 * data.contentHashCode()
+    override fun equals(other: Any?): Boolean =
+        this === other || other is SettingsData && offset == other.offset && data.contentEquals(other.data)
+    override fun hashCode(): Int {
+        var h = offset.hashCode()
+        h = 31 * h + data.contentHashCode()
+        return h
+    }
     override fun toString(): String = "SettingsData(offset=$offset, data=${data.toHex()})"
     public companion object {
         /** Encoded size in bytes without the variable tail. */
@@ -1179,6 +1860,9 @@ public class DebugText(
     /** ASCII text, not terminated */
     public val text: ByteArray,
 ) : Packet {
+    init {
+        require(text.size in 0..96) { "text: ${text.size} bytes, not 0..96" }
+    }
     override val type: Int get() = 7
     /** Encoded payload size in bytes. */
     internal val payloadSize: Int get() = 2 + text.size
@@ -1188,8 +1872,14 @@ public class DebugText(
         text.copyInto(b, at + 2)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
-    override fun equals(other: Any?): Boolean = other is DebugText && module == other.module && level == other.level && text.contentEquals(other.text)
-    override fun hashCode(): Int = 1 * module.hashCode() + 31 * level.hashCode() + 961 * text.contentHashCode()
+    override fun equals(other: Any?): Boolean =
+        this === other || other is DebugText && module == other.module && level == other.level && text.contentEquals(other.text)
+    override fun hashCode(): Int {
+        var h = module.hashCode()
+        h = 31 * h + level.hashCode()
+        h = 31 * h + text.contentHashCode()
+        return h
+    }
     override fun toString(): String = "DebugText(module=$module, level=$level, text=${text.toHex()})"
     public companion object {
         /** Encoded size in bytes without the variable tail. */
@@ -1220,6 +1910,9 @@ public class IrReceived(
     /** payload */
     public val data: ByteArray,
 ) : Packet {
+    init {
+        require(data.size in 0..8) { "data: ${data.size} bytes, not 0..8" }
+    }
     override val type: Int get() = 8
     /** Encoded payload size in bytes. */
     internal val payloadSize: Int get() = 4 + data.size
@@ -1231,8 +1924,16 @@ public class IrReceived(
         data.copyInto(b, at + 4)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
-    override fun equals(other: Any?): Boolean = other is IrReceived && senderId == other.senderId && side == other.side && senderLed == other.senderLed && power == other.power && data.contentEquals(other.data)
-    override fun hashCode(): Int = 1 * senderId.hashCode() + 31 * side.hashCode() + 961 * senderLed.hashCode() + 29791 * power.hashCode() + 923521 * data.contentHashCode()
+    override fun equals(other: Any?): Boolean =
+        this === other || other is IrReceived && senderId == other.senderId && side == other.side && senderLed == other.senderLed && power == other.power && data.contentEquals(other.data)
+    override fun hashCode(): Int {
+        var h = senderId.hashCode()
+        h = 31 * h + side.hashCode()
+        h = 31 * h + senderLed.hashCode()
+        h = 31 * h + power.hashCode()
+        h = 31 * h + data.contentHashCode()
+        return h
+    }
     override fun toString(): String = "IrReceived(senderId=$senderId, side=$side, senderLed=$senderLed, power=$power, data=${data.toHex()})"
     public companion object {
         /** Encoded size in bytes without the variable tail. */
@@ -1252,56 +1953,115 @@ public class IrReceived(
     }
 }
 
-/** A queued movement finished (also visible as locomotion.finished_id in the state). */
+/** A queued movement ended, whatever the outcome; one ending at rest is sent once the wheels stand still (at most ~300 ms), one followed at once by the next at the hand-over. */
 public data class MovementDone(
     /** movement id */
     public val id: Int,
+    /** how it ended (see [MovementOutcome]) */
+    public val outcome: Int,
+    /** how much was done, signed like the request: metres for move_straight, degrees turned for move_rotate and move_arc */
+    public val done: Float,
 ) : Packet {
     override val type: Int get() = 9
     /** Encoded payload size in bytes. */
-    internal val payloadSize: Int get() = 2
+    internal val payloadSize: Int get() = 7
     internal fun encodeTo(b: ByteArray, at: Int) {
         b.putU16(at, id)
+        b.putU8(at + 2, outcome)
+        b.putF32(at + 3, done)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 2
+        public const val SIZE: Int = 7
         /** Packet type. */
         public const val TYPE: Int = 9
-        internal const val PAYLOAD_SIZE_MAX: Int = 2
+        internal const val PAYLOAD_SIZE_MAX: Int = 7
         /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
         @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
         internal fun decode(b: ByteArray, at: Int, end: Int): MovementDone {
             val id = b.u16(at)
-            return MovementDone(id)
+            val outcome = b.u8(at + 2)
+            val done = b.f32(at + 3)
+            return MovementDone(id, outcome, done)
         }
     }
 }
 
-/** Ask for `hello`. */
-public data class HelloRequest(
-    /** protocol version of the host */
-    public val hostProtocolVersion: Int,
+/** The last 16 movement results and the queue now, in answer to `read_movements` (then `ack`). */
+public data class MovementLog(
+    /** id of the running movement, 0 if none */
+    public val currentId: Int,
+    /** movements waiting, including the running one */
+    public val queueLength: Int,
+    /** valid entries in the arrays, 0..16 */
+    public val count: Int,
+    /** movement ids, oldest first */
+    public val ids: List<Int>,
+    /** how each ended (see [MovementOutcome]) */
+    public val outcomes: List<Int>,
+    /** how much each did (as in movement_done) */
+    public val done: List<Float>,
 ) : Packet {
-    override val type: Int get() = 16
+    override val type: Int get() = 10
     /** Encoded payload size in bytes. */
-    internal val payloadSize: Int get() = 2
+    internal val payloadSize: Int get() = 116
     internal fun encodeTo(b: ByteArray, at: Int) {
-        b.putU16(at, hostProtocolVersion)
+        b.putU16(at, currentId)
+        b.putU8(at + 2, queueLength)
+        b.putU8(at + 3, count)
+        intsOf(ids, 16, "ids").let { a -> for (i in 0 until 16) b.putU16(at + 4 + 2 * i, a[i]) }
+        intsOf(outcomes, 16, "outcomes").let { a -> for (i in 0 until 16) b.putU8(at + 36 + i, a[i]) }
+        require(done.size == 16) { "done needs 16 values" }; for (i in 0 until 16) b.putF32(at + 52 + 4 * i, done[i])
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 2
+        public const val SIZE: Int = 116
+        /** Packet type. */
+        public const val TYPE: Int = 10
+        internal const val PAYLOAD_SIZE_MAX: Int = 116
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): MovementLog {
+            val currentId = b.u16(at)
+            val queueLength = b.u8(at + 2)
+            val count = b.u8(at + 3)
+            val ids = IntArrayList(IntArray(16) { b.u16(at + 4 + 2 * it) })
+            val outcomes = IntArrayList(IntArray(16) { b.u8(at + 36 + it) })
+            val done = List(16) { b.f32(at + 52 + 4 * it) }
+            return MovementLog(currentId, queueLength, count, ids, outcomes, done)
+        }
+    }
+}
+
+/** Ask for `hello`; starts a new host session unless `session` is the one the robot serves. */
+public data class HelloRequest(
+    /** protocol version of the host */
+    public val hostProtocolVersion: Int,
+    /** drawn at random (non-zero) when the host starts, kept across its reconnects; 0 = no session */
+    public val session: Long,
+) : Packet {
+    override val type: Int get() = 16
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 6
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU16(at, hostProtocolVersion)
+        b.putU32(at + 2, session)
+    }
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
+    public companion object {
+        /** Encoded size in bytes. */
+        public const val SIZE: Int = 6
         /** Packet type. */
         public const val TYPE: Int = 16
-        internal const val PAYLOAD_SIZE_MAX: Int = 2
+        internal const val PAYLOAD_SIZE_MAX: Int = 6
         /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
         @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
         internal fun decode(b: ByteArray, at: Int, end: Int): HelloRequest {
             val hostProtocolVersion = b.u16(at)
-            return HelloRequest(hostProtocolVersion)
+            val session = b.u32(at + 2)
+            return HelloRequest(hostProtocolVersion, session)
         }
     }
 }
@@ -1363,6 +2123,9 @@ public class UpdateSettings(
     /** new bytes */
     public val data: ByteArray,
 ) : Packet {
+    init {
+        require(data.size in 1..64) { "data: ${data.size} bytes, not 1..64" }
+    }
     override val type: Int get() = 19
     /** Encoded payload size in bytes. */
     internal val payloadSize: Int get() = 3 + data.size
@@ -1372,8 +2135,13 @@ public class UpdateSettings(
         data.copyInto(b, at + 3)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
-    override fun equals(other: Any?): Boolean = other is UpdateSettings && offset == other.offset && data.contentEquals(other.data)
-    override fun hashCode(): Int = 1 * offset.hashCode() + 31 * data.contentHashCode()
+    override fun equals(other: Any?): Boolean =
+        this === other || other is UpdateSettings && offset == other.offset && data.contentEquals(other.data)
+    override fun hashCode(): Int {
+        var h = offset.hashCode()
+        h = 31 * h + data.contentHashCode()
+        return h
+    }
     override fun toString(): String = "UpdateSettings(offset=$offset, data=${data.toHex()})"
     public companion object {
         /** Encoded size in bytes without the variable tail. */
@@ -1451,7 +2219,7 @@ public data object LoadDefaults : Packet {
 
 /** Queue a straight movement; negative distance drives backwards. */
 public data class MoveStraight(
-    /** movement id, non-zero, reported when finished */
+    /** movement id, non-zero, reported in movement_done when it ends */
     public val id: Int,
     /** distance [m] */
     public val distanceM: Float,
@@ -1558,7 +2326,7 @@ public data class MoveArc(
     }
 }
 
-/** Clear the movement queue and stop (braking on the profile unless `immediate`); also ends teleoperation and line following. */
+/** Stop: the running movement brakes on the profile (at once when `immediate`) and ends as stopped, queued ones are dropped; also ends teleoperation and line following. */
 public data class Stop(
     /** 1: motors off at once */
     public val immediate: Int,
@@ -1585,7 +2353,7 @@ public data class Stop(
     }
 }
 
-/** Teleoperation: hold these wheel speeds (per-wheel PID) until the next command or the link failsafe. */
+/** Teleoperation: hold these wheel speeds (per-wheel PID) until the next command or the link failsafe. Ends a running movement (stopped) and drops queued ones. */
 public data class WheelSpeeds(
     /** left wheel [m/s] */
     public val leftMps: Float,
@@ -1616,7 +2384,7 @@ public data class WheelSpeeds(
     }
 }
 
-/** Start or stop line following; speed 0 keeps settings.line_follow.speed_mps. */
+/** Start or stop line following; speed 0 keeps settings.line_follow.speed_mps. Starting ends a running movement (stopped) and drops queued ones. */
 public data class LineFollow(
     /** 1 start, 0 stop */
     public val run: Int,
@@ -1658,6 +2426,9 @@ public class IrSend(
     /** payload */
     public val data: ByteArray,
 ) : Packet {
+    init {
+        require(data.size in 0..8) { "data: ${data.size} bytes, not 0..8" }
+    }
     override val type: Int get() = 38
     /** Encoded payload size in bytes. */
     internal val payloadSize: Int get() = 1 + data.size
@@ -1666,8 +2437,13 @@ public class IrSend(
         data.copyInto(b, at + 1)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
-    override fun equals(other: Any?): Boolean = other is IrSend && power == other.power && data.contentEquals(other.data)
-    override fun hashCode(): Int = 1 * power.hashCode() + 31 * data.contentHashCode()
+    override fun equals(other: Any?): Boolean =
+        this === other || other is IrSend && power == other.power && data.contentEquals(other.data)
+    override fun hashCode(): Int {
+        var h = power.hashCode()
+        h = 31 * h + data.contentHashCode()
+        return h
+    }
     override fun toString(): String = "IrSend(power=$power, data=${data.toHex()})"
     public companion object {
         /** Encoded size in bytes without the variable tail. */
@@ -1684,35 +2460,88 @@ public class IrSend(
     }
 }
 
+/** Start, stop or reverse the track behaviour (thesis A.3). Starting ends a running movement (stopped) and drops queued ones; `stop`, `line_follow`, `wheel_speeds` and movements end the behaviour too. */
+public data class Track(
+    /** stop, start or reverse (see [TrackAction]) */
+    public val action: Int,
+) : Packet {
+    override val type: Int get() = 40
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 1
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, action)
+    }
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
+    public companion object {
+        /** Encoded size in bytes. */
+        public const val SIZE: Int = 1
+        /** Packet type. */
+        public const val TYPE: Int = 40
+        internal const val PAYLOAD_SIZE_MAX: Int = 1
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): Track {
+            val action = b.u8(at)
+            return Track(action)
+        }
+    }
+}
+
+/** Ask for `movement_log` (then `ack`): how the last 16 movements ended, for a host that was away. */
+public data object ReadMovements : Packet {
+    override val type: Int get() = 39
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 0
+    @Suppress("UNUSED_PARAMETER") // no payload
+    internal fun encodeTo(b: ByteArray, at: Int) {
+    }
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
+    /** Encoded size in bytes. */
+    public const val SIZE: Int = 0
+    /** Packet type. */
+    public const val TYPE: Int = 39
+    internal const val PAYLOAD_SIZE_MAX: Int = 0
+    /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+    @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+    internal fun decode(b: ByteArray, at: Int, end: Int): ReadMovements = ReadMovements
+}
+
 /** Size limits and direction of every packet type, from the schema. */
-public class PacketSpec(public val type: Int, public val name: String, public val minSize: Int,
-                        public val maxSize: Int, public val fromRobot: Boolean, public val acked: Boolean)
+public class PacketSpec(
+    public val type: Int, public val name: String, public val minSize: Int, public val maxSize: Int,
+    public val fromRobot: Boolean, public val acked: Boolean,
+    /** A read: the robot answers it every time and never takes it for a retransmission. */
+    public val idempotent: Boolean,
+)
 
 /** Every packet type of the protocol. */
 public val PACKET_SPECS: Map<Int, PacketSpec> = listOf(
-    PacketSpec(1, "hello", 30, 30, true, false),
-    PacketSpec(2, "state_full", 88, 88, true, false),
-    PacketSpec(3, "state_reduced", 19, 19, true, false),
-    PacketSpec(4, "ack", 1, 1, true, false),
-    PacketSpec(5, "error", 5, 5, true, false),
-    PacketSpec(6, "settings_data", 3, 67, true, false),
-    PacketSpec(7, "debug_text", 2, 98, true, false),
-    PacketSpec(8, "ir_received", 4, 12, true, false),
-    PacketSpec(9, "movement_done", 2, 2, true, false),
-    PacketSpec(16, "hello_request", 2, 2, false, false),
-    PacketSpec(17, "heartbeat", 0, 0, false, false),
-    PacketSpec(18, "set_sync", 3, 3, false, true),
-    PacketSpec(19, "update_settings", 3, 67, false, true),
-    PacketSpec(20, "read_settings", 0, 0, false, true),
-    PacketSpec(21, "save_settings", 0, 0, false, true),
-    PacketSpec(22, "load_defaults", 0, 0, false, true),
-    PacketSpec(32, "move_straight", 10, 10, false, true),
-    PacketSpec(33, "move_rotate", 10, 10, false, true),
-    PacketSpec(34, "move_arc", 14, 14, false, true),
-    PacketSpec(35, "stop", 1, 1, false, true),
-    PacketSpec(36, "wheel_speeds", 8, 8, false, false),
-    PacketSpec(37, "line_follow", 6, 6, false, true),
-    PacketSpec(38, "ir_send", 1, 9, false, true),
+    PacketSpec(1, "hello", 33, 33, true, false, false),
+    PacketSpec(2, "state_full", 97, 97, true, false, false),
+    PacketSpec(3, "state_reduced", 19, 19, true, false, false),
+    PacketSpec(4, "ack", 1, 1, true, false, false),
+    PacketSpec(5, "error", 5, 5, true, false, false),
+    PacketSpec(6, "settings_data", 3, 67, true, false, false),
+    PacketSpec(7, "debug_text", 2, 98, true, false, false),
+    PacketSpec(8, "ir_received", 4, 12, true, false, false),
+    PacketSpec(9, "movement_done", 7, 7, true, false, false),
+    PacketSpec(10, "movement_log", 116, 116, true, false, false),
+    PacketSpec(16, "hello_request", 6, 6, false, false, false),
+    PacketSpec(17, "heartbeat", 0, 0, false, false, false),
+    PacketSpec(18, "set_sync", 3, 3, false, true, false),
+    PacketSpec(19, "update_settings", 4, 67, false, true, false),
+    PacketSpec(20, "read_settings", 0, 0, false, true, true),
+    PacketSpec(21, "save_settings", 0, 0, false, true, false),
+    PacketSpec(22, "load_defaults", 0, 0, false, true, false),
+    PacketSpec(32, "move_straight", 10, 10, false, true, false),
+    PacketSpec(33, "move_rotate", 10, 10, false, true, false),
+    PacketSpec(34, "move_arc", 14, 14, false, true, false),
+    PacketSpec(35, "stop", 1, 1, false, true, false),
+    PacketSpec(36, "wheel_speeds", 8, 8, false, false, false),
+    PacketSpec(37, "line_follow", 6, 6, false, true, false),
+    PacketSpec(38, "ir_send", 1, 9, false, true, false),
+    PacketSpec(40, "track", 1, 1, false, true, false),
+    PacketSpec(39, "read_movements", 0, 0, false, true, true),
 ).associateBy { it.type }
 
 /** [PACKET_SPECS] indexed by type (0..255): one array load per frame. */
@@ -1729,6 +2558,7 @@ internal fun decodePacketPayload(type: Int, b: ByteArray, at: Int, end: Int): Pa
     7 -> DebugText.decode(b, at, end)
     8 -> IrReceived.decode(b, at, end)
     9 -> MovementDone.decode(b, at, end)
+    10 -> MovementLog.decode(b, at, end)
     16 -> HelloRequest.decode(b, at, end)
     17 -> Heartbeat.decode(b, at, end)
     18 -> SetSync.decode(b, at, end)
@@ -1743,6 +2573,8 @@ internal fun decodePacketPayload(type: Int, b: ByteArray, at: Int, end: Int): Pa
     36 -> WheelSpeeds.decode(b, at, end)
     37 -> LineFollow.decode(b, at, end)
     38 -> IrSend.decode(b, at, end)
+    40 -> Track.decode(b, at, end)
+    39 -> ReadMovements.decode(b, at, end)
     else -> throw IllegalArgumentException("unknown packet type $type")
 }
 
@@ -1757,6 +2589,7 @@ internal fun payloadSizeOf(p: Packet): Int = when (p) {
     is DebugText -> p.payloadSize
     is IrReceived -> p.payloadSize
     is MovementDone -> p.payloadSize
+    is MovementLog -> p.payloadSize
     is HelloRequest -> p.payloadSize
     is Heartbeat -> p.payloadSize
     is SetSync -> p.payloadSize
@@ -1771,6 +2604,8 @@ internal fun payloadSizeOf(p: Packet): Int = when (p) {
     is WheelSpeeds -> p.payloadSize
     is LineFollow -> p.payloadSize
     is IrSend -> p.payloadSize
+    is Track -> p.payloadSize
+    is ReadMovements -> p.payloadSize
 }
 
 /** Writes the payload of [p] into [b] from [at] ([payloadSizeOf] bytes): no intermediate array. */
@@ -1784,6 +2619,7 @@ internal fun encodePayloadInto(p: Packet, b: ByteArray, at: Int): Unit = when (p
     is DebugText -> p.encodeTo(b, at)
     is IrReceived -> p.encodeTo(b, at)
     is MovementDone -> p.encodeTo(b, at)
+    is MovementLog -> p.encodeTo(b, at)
     is HelloRequest -> p.encodeTo(b, at)
     is Heartbeat -> p.encodeTo(b, at)
     is SetSync -> p.encodeTo(b, at)
@@ -1798,6 +2634,8 @@ internal fun encodePayloadInto(p: Packet, b: ByteArray, at: Int): Unit = when (p
     is WheelSpeeds -> p.encodeTo(b, at)
     is LineFollow -> p.encodeTo(b, at)
     is IrSend -> p.encodeTo(b, at)
+    is Track -> p.encodeTo(b, at)
+    is ReadMovements -> p.encodeTo(b, at)
 }
 
 /** The wire type of a settings leaf. */
@@ -1858,9 +2696,12 @@ public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
     SettingsFieldInfo("proximity.ir_power", 161, FieldType.U8, 1, 0.0, 100.0, "percent", "highest beacon power; 0 turns the beacon off"),
     SettingsFieldInfo("proximity.beacon_period_ms", 162, FieldType.U16, 1, 10.0, 10000.0, "ms", "period of IR beacons"),
     SettingsFieldInfo("proximity.hold_ms", 164, FieldType.U16, 1, 10.0, 10000.0, "ms", "how long a sighting stays in the state"),
-    SettingsFieldInfo("link.failsafe_timeout_ms", 166, FieldType.U16, 1, 0.0, 60000.0, "ms", "stop host-driven motion after this long without a packet; 0 = off"),
-    SettingsFieldInfo("debug.level", 168, FieldType.U8, 1, 0.0, 4.0, "", "0 off, 1 errors, 2 info, 3 verbose, 4 trace"),
+    SettingsFieldInfo("track.speed_mps", 166, FieldType.F32, 1, 0.03, 0.3, "m/s", "cruise speed on the line"),
+    SettingsFieldInfo("track.token_boost_percent", 170, FieldType.U8, 1, 0.0, 100.0, "percent", "the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead"),
+    SettingsFieldInfo("track.token_origin_id", 171, FieldType.U8, 1, 0.0, 254.0, "", "the robot with this id creates the token at its first start; 0: none does"),
+    SettingsFieldInfo("link.failsafe_timeout_ms", 172, FieldType.U16, 1, 0.0, 60000.0, "ms", "stop host-driven motion after this long without a packet; 0 = off"),
+    SettingsFieldInfo("debug.level", 174, FieldType.U8, 1, 0.0, 4.0, "", "0 off, 1 errors, 2 info, 3 verbose, 4 trace"),
 )
 
 /** The settings compiled into the firmware. */
-public val SETTINGS_DEFAULTS: Settings = Settings(SettingsIdentity(1, "PocketBot"), SettingsSync(1, 100), SettingsScheduler(1000), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x471c4000.toInt()), Float.fromBits(0x42480000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x40000000.toInt())), Pid(Float.fromBits(0x39d1b717.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x3b03126f.toInt()), Float.fromBits(0x447a0000.toInt())), SettingsProfile(Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3ca3d70a.toInt())), SettingsLineFollow(Float.fromBits(0x3e19999a.toInt()), Float.fromBits(0x3d8f5c29.toInt()), Float.fromBits(0x3e800000.toInt()), 300, 1), SettingsLineSensor(listOf(100, 100, 100, 100, 100, 100, 100, 100), listOf(2000, 2000, 2000, 2000, 2000, 2000, 2000, 2000), 250), SettingsEncoder(40, 80), SettingsGeometry(Float.fromBits(0x3c1374bc.toInt()), Float.fromBits(0x3cd4fdf4.toInt())), SettingsMotors(1000), SettingsProximity(100, 40, 250), SettingsLink(1000), SettingsDebug(1))
+public val SETTINGS_DEFAULTS: Settings = Settings(SettingsIdentity(1, "PocketBot"), SettingsSync(1, 100), SettingsScheduler(1000), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x471c4000.toInt()), Float.fromBits(0x42480000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x40000000.toInt())), Pid(Float.fromBits(0x39d1b717.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x3b03126f.toInt()), Float.fromBits(0x447a0000.toInt())), SettingsProfile(Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3ca3d70a.toInt())), SettingsLineFollow(Float.fromBits(0x3e19999a.toInt()), Float.fromBits(0x3d8f5c29.toInt()), Float.fromBits(0x3e800000.toInt()), 300, 1), SettingsLineSensor(listOf(100, 100, 100, 100, 100, 100, 100, 100), listOf(2000, 2000, 2000, 2000, 2000, 2000, 2000, 2000), 250), SettingsEncoder(40, 80), SettingsGeometry(Float.fromBits(0x3c1374bc.toInt()), Float.fromBits(0x3cd4fdf4.toInt())), SettingsMotors(1000), SettingsProximity(100, 40, 250), SettingsTrack(Float.fromBits(0x3df5c28f.toInt()), 100, 1), SettingsLink(1000), SettingsDebug(1))

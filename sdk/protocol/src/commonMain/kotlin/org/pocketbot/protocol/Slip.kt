@@ -28,30 +28,36 @@ public object Slip {
 
 /**
  * Splits a SLIP byte stream into frames, however the stream was cut into chunks. Empty frames (END END) are
- * skipped silently; an invalid escape or a frame longer than [maxFrame] drops that frame and reports a
- * [ProtocolError.Framing], after which decoding resumes at the next END. Not thread-safe: one per stream.
+ * skipped silently; a frame longer than [maxFrame] is dropped and reported as [ProtocolError.TooLong], an invalid
+ * escape as [ProtocolError.Framing]; decoding resumes at the next END. Not thread-safe: one per stream.
  */
 public class SlipDecoder(private val maxFrame: Int = Frames.MAX_FRAME) {
     private val buf = ByteArray(maxFrame)
     private var size = 0
     private var escaped = false
     private var broken: String? = null
+    private var overflow = 0
 
     /** Feeds [length] bytes from [offset]; calls [onFrame] for each complete frame and [onError] for each dropped one. */
     public fun feed(
         bytes: ByteArray, offset: Int = 0, length: Int = bytes.size - offset,
-        onError: (ProtocolError.Framing) -> Unit = {}, onFrame: (ByteArray) -> Unit,
+        onError: (ProtocolError) -> Unit = {}, onFrame: (ByteArray) -> Unit,
     ) {
         for (i in offset until offset + length) {
             val b = bytes[i]
             if (b == Slip.END) {
                 val reason = broken
                 when {
+                    overflow > 0 -> onError(ProtocolError.TooLong(maxFrame + overflow))
                     reason != null -> onError(ProtocolError.Framing(reason))
                     escaped -> onError(ProtocolError.Framing("frame ends inside an escape"))
                     size > 0 -> onFrame(buf.copyOf(size))
                 }
-                size = 0; escaped = false; broken = null
+                size = 0; escaped = false; broken = null; overflow = 0
+                continue
+            }
+            if (overflow > 0) {
+                if (b != Slip.ESC) overflow++
                 continue
             }
             if (broken != null) continue
@@ -65,7 +71,7 @@ public class SlipDecoder(private val maxFrame: Int = Frames.MAX_FRAME) {
             } else if (b == Slip.ESC) {
                 escaped = true; continue
             } else b
-            if (size == maxFrame) { broken = "frame longer than $maxFrame bytes"; continue }
+            if (size == maxFrame) { overflow = 1; continue }
             buf[size++] = value
         }
     }

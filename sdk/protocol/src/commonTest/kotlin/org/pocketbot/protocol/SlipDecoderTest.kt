@@ -59,8 +59,7 @@ class SlipDecoderTest {
         val big = ByteArray(Frames.MAX_FRAME + 10) { 0x11 }
         val (out, errors) = decodeChunks(listOf(Slip.encode(big), Slip.encode(frames[0])))
         assertFrames(listOf(frames[0]), out)
-        assertEquals(1, errors.size)
-        assertTrue(errors[0] is ProtocolError.Framing)
+        assertEquals(listOf<ProtocolError>(ProtocolError.TooLong(Frames.MAX_FRAME + 10)), errors)
     }
 
     @Test
