@@ -72,6 +72,25 @@ worlds.append(world("box", "Thesis A.2: a line with a heavy box (100 g, friction
                     1.0, 0.4, [line([(0.05, 0.2), (0.95, 0.2)])], [pose(0.25, 0.2, 0), pose(0.12, 0.2, 0)],
                     [{"center": p(0.5, 0.2), "widthM": 0.04, "heightM": 0.09, "angleDeg": 0.0, "massKg": 0.1, "friction": 0.25, "movable": True}]))
 
+# Thesis A.2 as a scenario (make push): a loop whose bottom right corner is blocked by the heavy box of "box".
+# Two robots pushing straight on along the bottom edge move it out of the corner, off the loop.
+L, X1, Y0, Y1, RC = 0.2, 0.65, 0.15, 0.45, 0.08
+loop = [line([(L, Y0), (X1, Y0)]), arc(X1, Y0 + RC, RC, -90, 90), line([(X1 + RC, Y0 + RC), (X1 + RC, Y1 - RC)]),
+        arc(X1, Y1 - RC, RC, 0, 90), line([(X1, Y1), (L, Y1)]), arc(L, Y1 - RC, RC, 90, 90),
+        line([(L - RC, Y1 - RC), (L - RC, Y0 + RC)]), arc(L, Y0 + RC, RC, 180, 90)]
+worlds.append(world("push", "Thesis A.2, cooperative object manipulation: a loop (0.61 x 0.30 m, corners of 80 mm radius) driven "
+                    "counter-clockwise, its bottom right corner blocked by a heavy box (100 g, friction 0.25) that one robot "
+                    "cannot push and two can, 140 mm wide so that two robots side by side fit its face. Two robots start on the bottom "
+                    "edge, one behind the other.",
+                    1.0, 0.6, loop, [pose(0.40, Y0, 0), pose(0.25, Y0, 0)],
+                    [{"center": p(X1 + 0.012, Y0), "widthM": 0.04, "heightM": 0.14, "angleDeg": 0.0, "massKg": 0.1, "friction": 0.25, "movable": True}]))
+
+# Thesis A.3 as a scenario (make track): the round track with an immovable box on it at the top.
+worlds.append(world("track", "Thesis A.3, multiple robots on a track: the round track (0.3 m radius) with a fixed 40 mm box on it "
+                    "at 90 degrees; three robots start 120 degrees apart, counter-clockwise.",
+                    0.8, 0.8, [arc(0.4, 0.4, R)], [on_circle(0.4, 0.4, R, a) for a in (-90, 30, 150)],
+                    [{"center": p(0.4, 0.4 + R), "widthM": 0.04, "heightM": 0.04, "angleDeg": 0.0, "massKg": 1.0, "friction": 0.25, "movable": False}]))
+
 for wd in worlds:
     with open(os.path.join(HERE, wd["name"] + ".json"), "w") as f:
         json.dump(wd, f, indent=2)

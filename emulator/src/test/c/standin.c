@@ -72,6 +72,24 @@ EXPORT(sim_uart_rx) void sim_uart_rx(int32_t byte) {
     txq[txq_head++ & 255] = (uint8_t)byte;
 }
 
+typedef struct __attribute__((packed)) {
+    int64_t ticks;
+    int32_t kind, arg;
+} event_t;
+
+static event_t events[64];
+
+EXPORT(sim_events) int32_t sim_events(void) { return (int32_t)(uintptr_t)events; }
+
+EXPORT(sim_run_events) void sim_run_events(int32_t count, int64_t end) {
+    for (int32_t i = 0; i < count && i < 64; i++) {
+        sim_advance(events[i].ticks);
+        if (events[i].kind == 0) sim_uart_rx(events[i].arg);
+        else sim_encoder_edge(events[i].arg, events[i].ticks);
+    }
+    if (end >= 0) sim_advance(end);
+}
+
 EXPORT(sim_uart_tx_take) int32_t sim_uart_tx_take(int32_t max) {
     int32_t n = 0;
     while (n < max && txq_tail != txq_head) tx[n++] = txq[txq_tail++ & 255];

@@ -5,11 +5,13 @@ import org.pocketbot.emulator.internal.ParallelStepper
 import org.pocketbot.emulator.physics.RobotParams
 import org.pocketbot.emulator.transport.ControlPort
 import org.pocketbot.emulator.transport.InProcessDiscoverer
+import org.pocketbot.emulator.transport.ListenAddress
 import org.pocketbot.emulator.transport.TcpEndpoint
-import org.pocketbot.emulator.world.Pose
+import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
 import org.pocketbot.sdk.transport.Discoverer
+import java.net.InetAddress
 import java.security.MessageDigest
 import java.nio.ByteBuffer
 import kotlin.time.Duration
@@ -37,7 +39,23 @@ public data class EmulatorConfig(
     val threads: Int = Runtime.getRuntime().availableProcessors().coerceIn(1, 8),
     /** Below this many robots one thread steps them all; from it on, the emulator measures serial and parallel stepping and uses the faster. */
     val parallelFrom: Int = 4,
+    /** The wall clock that paces [Speed.Realtime], in nanoseconds; tests put a clock of their own here. */
+    val wallClock: WallClock = WallClock.SYSTEM,
 )
+
+/** A wall clock for [Speed.Realtime] pacing: the time now, and a way to wait. */
+public interface WallClock {
+    public fun nanoTime(): Long
+    public fun sleep(millis: Long)
+
+    public companion object {
+        /** The machine's monotonic clock. */
+        public val SYSTEM: WallClock = object : WallClock {
+            override fun nanoTime(): Long = System.nanoTime()
+            override fun sleep(millis: Long) = Thread.sleep(millis)
+        }
+    }
+}
 
 /**
  * Runs simulated PocketBot2 robots, each with its own instance of the real firmware (WebAssembly under
@@ -70,7 +88,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     @Volatile private var running = false
     @Volatile private var paused = false
     @Volatile public var speed: Speed = Speed.Realtime(1.0)
-    private var controlPort: ControlPort? = null
+    @Volatile private var controlPort: ControlPort? = null
 
     public val world: World get() = sim.spec
 
@@ -91,7 +109,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         val rid = id ?: (handles.size % 254 + 1)
         require(rid in 1..254) { "robot id $rid out of 1..254" }
         require(id == null || handles.none { it.id == rid }) { "robot id $rid exists" }
-        val start = pose ?: world.starts.getOrNull(handles.size) ?: world.starts.firstOrNull()
+        val start = pose ?: (world.starts.getOrNull(handles.size) ?: world.starts.firstOrNull())?.toPose()
             ?: Pose(world.widthM / 2, world.heightM / 2, 0.0)
         val r = SimRobot(rid, handles.size, config.robotParams, sim, image, start, config.seed, config.noise)
         r.bootAt(nowTicks)
@@ -105,10 +123,10 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     }
 
     public fun runFor(duration: Duration) {
-        val steps = (SimTime.fromDuration(duration) / SimTime.STEP_TICKS).toInt()
-        var done = 0
+        val steps = SimTime.fromDuration(duration) / SimTime.STEP_TICKS
+        var done = 0L
         while (done < steps) {
-            val n = minOf(50, steps - done)
+            val n = minOf(50L, steps - done).toInt()
             synchronized(lock) { repeat(n) { stepLocked() } }
             done += n
         }
@@ -154,14 +172,19 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
 
     // ---- running on its own thread ------------------------------------------------------------------------------
 
-    /** Runs on a background thread at [speed] until [stop] or [close]. */
+    /** Runs on a background thread at [speed] until [stop] or [close]; real time counts from this call. */
     public fun start(speed: Speed = this.speed) {
         this.speed = speed
         if (loop != null) return
         running = true
         paused = false
-        loop = Thread({ runLoop() }, "emulator-loop").apply { isDaemon = true; start() }
+        val wallStart = config.wallClock.nanoTime()
+        val simStart = timeTicks
+        loop = Thread({ runLoop(wallStart, simStart) }, "emulator-loop").apply { isDaemon = true; start() }
     }
+
+    /** True while the emulator steps on its own thread ([start] until [stop]). */
+    public val isRunningOnItsOwn: Boolean get() = loop != null
 
     public fun pause() { paused = true }
     public fun resume() { paused = false }
@@ -176,22 +199,23 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         loop = null
     }
 
-    private fun runLoop() {
-        var wallStart = System.nanoTime()
-        var simStart = timeTicks
+    private fun runLoop(wallStartNs: Long, simStartTicks: Long) {
+        val clock = config.wallClock
+        var wallStart = wallStartNs
+        var simStart = simStartTicks
         var lastSpeed = speed
         var wasPaused = false
         while (running) {
-            if (paused) { wasPaused = true; Thread.sleep(5); continue }
+            if (paused) { wasPaused = true; clock.sleep(5); continue }
             val sp = speed
-            if (wasPaused || sp != lastSpeed) { wallStart = System.nanoTime(); simStart = timeTicks; lastSpeed = sp; wasPaused = false }
+            if (wasPaused || sp != lastSpeed) { wallStart = clock.nanoTime(); simStart = timeTicks; lastSpeed = sp; wasPaused = false }
             when (sp) {
                 Speed.AsFastAsPossible -> synchronized(lock) { repeat(20) { stepLocked() } }
                 is Speed.Realtime -> {
-                    val elapsedNs = System.nanoTime() - wallStart
+                    val elapsedNs = clock.nanoTime() - wallStart
                     val target = simStart + (elapsedNs * sp.factor * SimTime.TICKS_PER_SECOND / 1e9).toLong()
                     val behind = (target - timeTicks) / SimTime.STEP_TICKS
-                    if (behind <= 0) Thread.sleep(1)
+                    if (behind <= 0) clock.sleep(1)
                     else synchronized(lock) { repeat(minOf(behind, 200L).toInt()) { stepLocked() } }
                 }
             }
@@ -204,24 +228,66 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     public fun discoverer(): Discoverer = InProcessDiscoverer { robots.map { it.device() } }
 
     /**
-     * Opens a TCP endpoint (SLIP frames, like a Bluetooth serial link) for every robot on 127.0.0.1, robot i at
+     * Opens a TCP endpoint (SLIP frames, like a Bluetooth serial link) for every robot on [listen], robot i at
      * [basePort] + i (0: any free port), and the control port (see emulator/README.md) at [controlPort]
      * (0: any free port, -1: none). Returns the control port's number, or -1.
+     *
+     * [listen] is the loopback address unless told otherwise: only programs on this machine reach the robots.
+     * [ListenAddress.ANY] puts them on the network (a phone on the same Wi-Fi), [ListenAddress.reachable] says at
+     * which addresses. Endpoints opened before are closed first. Throws [java.net.BindException] when a port is
+     * taken or [listen] is no address of this machine; then nothing is left open.
      */
-    public fun startTcp(basePort: Int = 0, controlPort: Int = -1): Int {
-        for ((i, h) in robots.withIndex()) h.startTcp(if (basePort == 0) 0 else basePort + i)
-        if (controlPort >= 0) {
-            val cp = ControlPort(controlPort) { robots }
+    public fun startTcp(basePort: Int = 0, controlPort: Int = -1, listen: InetAddress = ListenAddress.LOOPBACK): Int {
+        stopTcp()
+        try {
+            for ((i, h) in robots.withIndex()) h.startTcp(if (basePort == 0) 0 else basePort + i, listen)
+            if (controlPort < 0) return -1
+            val cp = ControlPort(listen, controlPort) { robots }
             this.controlPort = cp
             return cp.port
+        } catch (e: java.io.IOException) {
+            stopTcp()
+            throw e
         }
-        return -1
+    }
+
+    /** Closes every TCP endpoint and the control port; hosts connected over TCP lose the link. */
+    public fun stopTcp() {
+        controlPort?.close()
+        controlPort = null
+        for (h in robots) h.closeTcp()
     }
 
     // ---- ground truth -----------------------------------------------------------------------------------------
 
+    /**
+     * How many times two robot bodies were found overlapping at the end of a step (and pushed apart) since the
+     * start: 0 means no robot ever touched another. Ground truth for tests of multi-robot behaviour.
+     */
+    public val robotContacts: Long get() = synchronized(lock) { sim.robotContacts }
+
     /** Positions of the world's boxes now (same order as [World.boxes]). */
-    public fun boxes(): List<Pose> = synchronized(lock) { sim.boxes.map { Pose(it.x, it.y, it.spec.angleDeg) } }
+    public fun boxes(): List<Pose> = synchronized(lock) { sim.boxes.map { Pose.ofDegrees(it.x, it.y, it.spec.angleDeg) } }
+
+    /**
+     * How far box [index] is from the tape now (ground truth): the shortest distance from its outline to the edge of
+     * any tape, in metres (outline sampled every millimetre), 0 when its outline touches tape.
+     */
+    public fun boxClearanceM(index: Int = 0): Double = synchronized(lock) {
+        val b = sim.boxes[index]
+        val hw = b.spec.widthM / 2; val hh = b.spec.heightM / 2
+        val c = kotlin.math.cos(b.angle); val s = kotlin.math.sin(b.angle)
+        var best = Double.POSITIVE_INFINITY
+        fun edge(x0: Double, y0: Double, x1: Double, y1: Double) {
+            val n = maxOf(1, (kotlin.math.hypot(x1 - x0, y1 - y0) * 1000).toInt())
+            for (k in 0..n) {
+                val lx = x0 + (x1 - x0) * k / n; val ly = y0 + (y1 - y0) * k / n
+                best = minOf(best, sim.surface.distanceToTapeEdge(b.x + lx * c - ly * s, b.y + lx * s + ly * c))
+            }
+        }
+        edge(-hw, -hh, hw, -hh); edge(hw, -hh, hw, hh); edge(hw, hh, -hw, hh); edge(-hw, hh, -hw, -hh)
+        best.coerceAtLeast(0.0)
+    }
 
     /**
      * A hash of everything simulated: time, every robot's true pose, wheel travel and whole firmware memory,
@@ -244,8 +310,8 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
 
     override fun close() {
         stop()
-        controlPort?.close()
-        for (h in robots) { h.closeTcp(); h.sim.link.dropConnection("emulator closed") }
+        stopTcp()
+        for (h in robots) h.sim.link.dropConnection("emulator closed")
         stepper.close()
     }
 

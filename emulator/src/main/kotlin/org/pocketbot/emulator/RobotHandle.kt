@@ -3,16 +3,20 @@ package org.pocketbot.emulator
 import org.pocketbot.emulator.link.LinkSettings
 import org.pocketbot.emulator.transport.InProcessDevice
 import org.pocketbot.emulator.transport.InProcessTransport
+import org.pocketbot.emulator.transport.ListenAddress
 import org.pocketbot.emulator.transport.TcpEndpoint
-import org.pocketbot.emulator.world.Pose
+import org.pocketbot.sdk.Pose
 import org.pocketbot.protocol.Crc16
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.RobotState
+import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.StateFull
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.Transport
+import java.net.InetAddress
+import java.net.InetSocketAddress
 
 /** Total travel of each wheel on the ground, in metres (signed: backwards is negative). */
 public data class WheelDistances(val leftM: Double, val rightM: Double)
@@ -30,13 +34,20 @@ public class RobotHandle internal constructor(
 
     /** The name the firmware advertises (settings.identity.name), e.g. `PocketBot-3`. */
     public val name: String get() = synchronized(lock) {
-        val bytes = sim.firmware.readBytes(sim.firmware.settingsAddress + 1, 16)
+        val bytes = sim.firmware.readBytes(sim.firmware.settingsAddress + NAME_FIELD.offset, NAME_FIELD.size)
         val end = bytes.indexOf(0).let { if (it < 0) bytes.size else it }
         String(bytes, 0, end, Charsets.US_ASCII)
     }
 
-    /** True pose of the axle midpoint (m, degrees counter-clockwise from +x). */
-    public val truePose: Pose get() = synchronized(lock) { Pose(sim.x, sim.y, Math.toDegrees(sim.theta)) }
+    /**
+     * Power-cycles this robot: its firmware starts afresh (a new instance, all RAM lost) at the current simulated
+     * time and sends `hello` as a real robot does at reset; the EEPROM (settings saved with `save_settings`) is
+     * kept. The body, its pose and the host link stay as they are; a connected host stays connected.
+     */
+    public fun reset(): Unit = synchronized(lock) { sim.reset(emulator.timeTicks) }
+
+    /** True pose of the axle midpoint (ground truth, the same frame as the world file's). */
+    public val truePose: Pose get() = synchronized(lock) { Pose(sim.x, sim.y, sim.theta) }
 
     /** True travel of both wheels since the robot was added. */
     public val trueWheelDistances: WheelDistances get() = synchronized(lock) { WheelDistances(sim.distL, sim.distR) }
@@ -93,6 +104,10 @@ public class RobotHandle internal constructor(
     public val linkBytesLost: Long get() = sim.link.bytesLost
     public val linkBytesCorrupted: Long get() = sim.link.bytesCorrupted
 
+    /** Host bytes the link dropped because its buffer ([LinkSettings.bufferBytes]) was full: a host that sends
+     *  faster than the baud rate carries. */
+    public val linkBytesOverflowed: Long get() = sim.link.bytesOverflowed
+
     // ---- connections --------------------------------------------------------------------------------------------
 
     public val address: String get() = "emulator:$id"
@@ -108,16 +123,27 @@ public class RobotHandle internal constructor(
 
     private var tcp: TcpEndpoint? = null
 
-    /** The TCP port of this robot's endpoint on 127.0.0.1, or -1 when it has none. */
+    /** The TCP port of this robot's endpoint, or -1 when it has none. */
     public val tcpPort: Int get() = tcp?.port ?: -1
 
-    /** Opens a TCP endpoint for this robot on 127.0.0.1:[port] (0: any free port); returns the port. */
-    public fun startTcp(port: Int = 0): Int = synchronized(this) {
+    /** The host connected to this robot's TCP endpoint now (address and port), or null. */
+    public val tcpClient: InetSocketAddress? get() = tcp?.client
+
+    /**
+     * Opens a TCP endpoint for this robot on [listen]:[port] (0: any free port); returns the port. By default only
+     * programs on this machine reach it; [ListenAddress.ANY] puts it on the network. Throws [java.net.BindException]
+     * when the port is taken or [listen] is no address of this machine.
+     */
+    public fun startTcp(port: Int = 0, listen: InetAddress = ListenAddress.LOOPBACK): Int = synchronized(this) {
         tcp?.let { return it.port }
-        TcpEndpoint(sim.link, port, "robot-$id").also { tcp = it }.port
+        TcpEndpoint(sim.link, listen, port, "robot-$id").also { tcp = it }.port
     }
 
     internal fun closeTcp() { synchronized(this) { tcp?.close(); tcp = null } }
 
     override fun toString(): String = "robot $id"
+
+    private companion object {
+        val NAME_FIELD = SETTINGS_FIELDS.single { it.path == "identity.name" }
+    }
 }

@@ -7,7 +7,7 @@ import org.pocketbot.emulator.firmware.SimSensor
 import org.pocketbot.emulator.link.RobotLink
 import org.pocketbot.emulator.physics.Obb
 import org.pocketbot.emulator.physics.RobotParams
-import org.pocketbot.emulator.world.Pose
+import org.pocketbot.sdk.Pose
 import java.util.SplittableRandom
 import kotlin.math.PI
 import kotlin.math.abs
@@ -31,9 +31,9 @@ internal class SimRobot(
     @Volatile var noise: NoiseSettings,
 ) : FirmwareHost {
     // Pose of the axle midpoint; the body is centred on it.
-    var x = start.x
-    var y = start.y
-    var theta = Math.toRadians(start.headingDeg)
+    var x = start.xM
+    var y = start.yM
+    var theta = start.headingRad
 
     /** Ground speed of each wheel (m/s), the wheels' total travel (m, signed), and the motors' duty (-1..1). */
     var vl = 0.0; var vr = 0.0
@@ -83,7 +83,8 @@ internal class SimRobot(
     private val txBuf = ByteArray(RobotLink.MAX_TAKE)
     private var txSteps = 0
 
-    val firmware = FirmwareInstance(image, this)
+    private val image = image
+    var firmware = FirmwareInstance(image, this); private set
 
     /** Set by the emulator while a step defers this robot to the serial contact phase. */
     var deferred = false
@@ -98,9 +99,18 @@ internal class SimRobot(
         readOutputs()
     }
 
+    /** A power cycle: a fresh firmware instance (nothing of the old RAM survives) with the old one's EEPROM. */
+    fun reset(now: Long) {
+        val eeprom = firmware.eeprom()
+        firmware = FirmwareInstance(image, this)
+        if (eeprom != null) firmware.loadEeprom(eeprom)
+        irInCount = 0
+        bootAt(now)
+    }
+
     /** Moves the robot (a hand placing it); the wheels stop. */
     fun place(pose: Pose) {
-        x = pose.x; y = pose.y; theta = Math.toRadians(pose.headingDeg)
+        x = pose.xM; y = pose.yM; theta = pose.headingRad
         vl = 0.0; vr = 0.0; prevV = 0.0; contactBox = -1
         spotsValid = false; colourValid = false
     }
@@ -169,19 +179,21 @@ internal class SimRobot(
             }
             irInCount = 0
         }
-        // Host bytes and encoder edges at their own times.
+        // Host bytes and encoder edges at their own times, merged in time order and handed over in one batch.
         link.scheduleHostBytes(t0)
         var e = 0
+        var queued = 0
         while (true) {
             val te = if (e < nEdges) edgeTimes[e] else Long.MAX_VALUE
             val tr = link.nextRxTime()
             if (tr < t1 && tr <= te) {
-                fw.advance(tr - bootTicks); fw.uartRx(link.popRx())
+                fw.putEvent(queued++, tr - bootTicks, FirmwareInstance.EVENT_UART_RX, link.popRx())
             } else if (te <= t1) {
-                fw.advance(te - bootTicks); fw.encoderEdge(edgeWheels[e], te - bootTicks); e++
+                fw.putEvent(queued++, te - bootTicks, FirmwareInstance.EVENT_ENCODER_EDGE, edgeWheels[e]); e++
             } else break
+            if (queued == FirmwareInstance.EVENT_CAPACITY) { fw.runEvents(queued, -1); queued = 0 }
         }
-        fw.advance(t1 - bootTicks)
+        fw.runEvents(queued, t1 - bootTicks)
         readOutputs()
 
         // The UART drains at the baud rate. With no host attached the bytes go nowhere, so it is enough to

@@ -149,28 +149,17 @@ internal class SimWorld(val spec: World) {
                 if (power <= 0) continue
                 val range = p.irRangeM * power / 100.0
                 // LED position and direction.
-                val (lx, ly, la) = when (led) {
-                    0 -> Triple(p.lengthM / 2, 0.0, 0.0)
-                    1 -> Triple(0.0, -p.widthM / 2, -PI / 2)
-                    2 -> Triple(-p.lengthM / 2, 0.0, PI)
-                    else -> Triple(0.0, p.widthM / 2, PI / 2)
-                }
+                // LED position (lx, ly) and direction (la) in the robot frame; no tuple: this runs per beacon.
+                val lx = when (led) { 0 -> p.lengthM / 2; 2 -> -p.lengthM / 2; else -> 0.0 }
+                val ly = when (led) { 1 -> -p.widthM / 2; 3 -> p.widthM / 2; else -> 0.0 }
+                val la = when (led) { 0 -> 0.0; 1 -> -PI / 2; 2 -> PI; else -> PI / 2 }
                 val c = cos(s.theta); val sn = sin(s.theta)
                 val ex = s.x + lx * c - ly * sn; val ey = s.y + lx * sn + ly * c
                 val dirA = s.theta + la
                 val dx = cos(dirA); val dy = sin(dirA)
                 // Other robots.
                 val span = (range / gridCell).toInt() + 1
-                val cx0 = (ex / gridCell).toInt(); val cy0 = (ey / gridCell).toInt()
-                for (gy in max(0, cy0 - span)..min(gridRows - 1, cy0 + span)) for (gx in max(0, cx0 - span)..min(gridCols - 1, cx0 + span)) {
-                    var i = cellHead[gy * gridCols + gx]
-                    while (i >= 0) {
-                        val q = robots[i]
-                        i = next[i]
-                        if (q === s) continue
-                        deliverTo(q, s, k, ex, ey, dx, dy, range, cosLed)
-                    }
-                }
+                forEachRobotNear(ex, ey, span) { q -> if (q !== s) deliverTo(q, s, k, ex, ey, dx, dy, range, cosLed, span) }
                 // Reflection from boxes, back into the sender's receiver on that side.
                 if (led == 0 || led == 2) {
                     val reflectRange = range / 2
@@ -190,7 +179,7 @@ internal class SimWorld(val spec: World) {
         }
     }
 
-    private fun deliverTo(q: SimRobot, s: SimRobot, k: Int, ex: Double, ey: Double, dx: Double, dy: Double, range: Double, cosLed: Double) {
+    private fun deliverTo(q: SimRobot, s: SimRobot, k: Int, ex: Double, ey: Double, dx: Double, dy: Double, range: Double, cosLed: Double, span: Int) {
         val qp = q.params
         val c = cos(q.theta); val sn = sin(q.theta)
         for (side in 0..1) {
@@ -204,11 +193,57 @@ internal class SimWorld(val spec: World) {
             val ax = if (side == 0) c else -c; val ay = if (side == 0) sn else -sn
             val cosIn = (-vx * ax - vy * ay) / dist
             if (cosIn < cos(Math.toRadians(qp.irReceiverHalfAngleDeg))) continue
+            if (blocked(ex, ey, rx, ry, dist, s, q, span)) continue
             q.irHeard(side, s.irOutSender[k], s.irOutLed[k], s.irOutPower[k], s.irOutLen[k], s.irOutLo[k], s.irOutHi[k])
         }
     }
 
+    private val occluder = Obb()
+
+    /**
+     * Whether the light from (ex, ey) to a receiver at (rx, ry), [dist] away, is stopped on its way by a box or by
+     * the body of a robot other than its sender [s] and receiver [q] (IR does not pass through bodies: a robot
+     * hears the robot right in front of it, not the ones hidden behind that one).
+     */
+    private fun blocked(ex: Double, ey: Double, rx: Double, ry: Double, dist: Double, s: SimRobot, q: SimRobot, span: Int): Boolean {
+        val ux = (rx - ex) / dist; val uy = (ry - ey) / dist
+        for (b in boxes) {
+            val reach = (b.spec.widthM + b.spec.heightM) / 2
+            if (distanceToSegment(b.x, b.y, ex, ey, ux, uy, dist) > reach) continue
+            if (b.obb.rayDistance(ex, ey, ux, uy) < dist) return true
+        }
+        val reach = robots[0].params.let { hypot(it.lengthM, it.widthM) / 2 }
+        forEachRobotNear(ex, ey, span) { o ->
+            if (o === s || o === q || distanceToSegment(o.x, o.y, ex, ey, ux, uy, dist) > reach) return@forEachRobotNear
+            o.body(occluder)
+            if (occluder.rayDistance(ex, ey, ux, uy) < dist) return true
+        }
+        return false
+    }
+
+    /** Calls [action] for each robot in the grid cells within [span] cells of the one holding (x, y), in grid order. */
+    private inline fun forEachRobotNear(x: Double, y: Double, span: Int, action: (SimRobot) -> Unit) {
+        val cx0 = (x / gridCell).toInt(); val cy0 = (y / gridCell).toInt()
+        for (gy in max(0, cy0 - span)..min(gridRows - 1, cy0 + span)) for (gx in max(0, cx0 - span)..min(gridCols - 1, cx0 + span)) {
+            var i = cellHead[gy * gridCols + gx]
+            while (i >= 0) {
+                val robot = robots[i]
+                i = next[i]
+                action(robot)
+            }
+        }
+    }
+
+    /** Distance from (px, py) to the segment from (ax, ay) along the unit vector (ux, uy) for [len]. */
+    private fun distanceToSegment(px: Double, py: Double, ax: Double, ay: Double, ux: Double, uy: Double, len: Double): Double {
+        val t = ((px - ax) * ux + (py - ay) * uy).coerceIn(0.0, len)
+        return hypot(ax + ux * t - px, ay + uy * t - py)
+    }
+
     // ---- robots bumping into robots ----------------------------------------------------------------------------
+
+    /** Pairs of robot bodies found overlapping (and pushed apart) at the end of a step, since the start. */
+    var robotContacts = 0L; private set
 
     private val bodyA = Obb()
     private val bodyB = Obb()
@@ -233,6 +268,7 @@ internal class SimWorld(val spec: World) {
                         val a = robots[ia]; val b = robots[ib]
                         a.body(bodyA); b.body(bodyB)
                         if (bodyA.overlap(bodyB, overlapOut)) {
+                            robotContacts++
                             val d = overlapOut[0] / 2
                             a.shove(overlapOut[1] * d, overlapOut[2] * d)
                             b.shove(-overlapOut[1] * d, -overlapOut[2] * d)

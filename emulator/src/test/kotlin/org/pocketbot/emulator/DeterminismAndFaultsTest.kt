@@ -1,5 +1,6 @@
 package org.pocketbot.emulator
 
+import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.link.LinkSettings
 import org.pocketbot.protocol.Ack
 import org.pocketbot.protocol.LineFollow
@@ -37,7 +38,7 @@ class DeterminismAndFaultsTest {
         ).use { emu ->
             val hosts = List(24) { k ->
                 val a = Math.toRadians(k * 15.0)
-                TestHost(emu.addRobot(pose = org.pocketbot.emulator.world.Pose(0.4 + 0.3 * kotlin.math.cos(a), 0.4 + 0.3 * kotlin.math.sin(a), k * 15.0 + 90)))
+                TestHost(emu.addRobot(pose = Pose.ofDegrees(0.4 + 0.3 * kotlin.math.cos(a), 0.4 + 0.3 * kotlin.math.sin(a), k * 15.0 + 90)))
             }
             hosts.forEach { it.send(LineFollow(1, 0, 0f)) }
             emu.runFor(1.5.seconds)

@@ -23,13 +23,13 @@ class LineFollowingTest {
             while (t < 9000) { // the 1 m line takes ~6.5 s at the default 0.15 m/s
                 emu.runFor(10.milliseconds); t += 10
                 val p = robot.truePose
-                if (p.x < 1.09) maxOffset = max(maxOffset, abs(p.y - 0.15))
+                if (p.xM < 1.09) maxOffset = max(maxOffset, abs(p.yM - 0.15))
             }
             val end = robot.truePose
             val state = robot.state()
-            assertTrue(end.x > 1.09, "robot stopped at x=${end.x}, before the line's end at 1.10")
+            assertTrue(end.xM > 1.09, "robot stopped at x=${end.xM}, before the line's end at 1.10")
             assertTrue(maxOffset < 0.002, "robot strayed ${maxOffset * 1000} mm from the line")
-            assertEquals(LineFollowStatus.LOST.code, state.lineFollow.status, "line follower after the end: ${state.lineFollow}")
+            assertEquals(LineFollowStatus.LOST, state.lineFollow.status, "line follower after the end: ${state.lineFollow}")
             assertEquals(0 to 0, robot.pwmPermille, "motors stopped after the line was lost")
         }
     }
@@ -41,17 +41,17 @@ class LineFollowingTest {
         TestHost(robot).use { host ->
             host.send(LineFollow(1, 0, 0f))
             var angle = 0.0
-            var prev = robot.truePose.let { polarAngle(it.x, it.y, cx, cy) }
+            var prev = robot.truePose.let { polarAngle(it.xM, it.yM, cx, cy) }
             var maxRadial = 0.0
             var t = 0
             while (angle < 2 * PI && t < 20_000) {
                 emu.runFor(10.milliseconds); t += 10
                 val p = robot.truePose
-                val a = polarAngle(p.x, p.y, cx, cy)
+                val a = polarAngle(p.xM, p.yM, cx, cy)
                 angle += unwrap(prev, a); prev = a
-                maxRadial = max(maxRadial, abs(radius(p.x, p.y, cx, cy) - r))
+                maxRadial = max(maxRadial, abs(radius(p.xM, p.yM, cx, cy) - r))
                 val s = robot.state()
-                assertEquals(LineFollowStatus.FOLLOWING.code, s.lineFollow.status, "at t=$t ms, ${angle / PI * 180} deg: ${s.line}")
+                assertEquals(LineFollowStatus.FOLLOWING, s.lineFollow.status, "at t=$t ms, ${angle / PI * 180} deg: ${s.line}")
             }
             assertTrue(angle >= 2 * PI, "one lap not done in ${t / 1000.0} s: ${angle / PI * 180} deg")
             assertTrue(maxRadial < 0.004, "robot strayed ${maxRadial * 1000} mm from the track")
@@ -74,7 +74,7 @@ class LineFollowingTest {
                 val v = ((w.leftM + w.rightM) - (prev.leftM + prev.rightM)) / 2 / 0.1
                 prev = w
                 val p = robot.truePose
-                val deg = Math.toDegrees(polarAngle(p.x, p.y, cx, cy)).let { if (it < 0) it + 360 else it }
+                val deg = Math.toDegrees(polarAngle(p.xM, p.yM, cx, cy)).let { if (it < 0) it + 360 else it }
                 val zone = when { deg in 20.0..60.0 -> "red"; deg in 200.0..240.0 -> "blue"; deg in 100.0..160.0 || deg in 280.0..340.0 -> "black"; else -> null }
                 if (zone != null) speeds.getOrPut(zone) { ArrayList() } += v
             }

@@ -1,6 +1,6 @@
 package org.pocketbot.emulator
 
-import org.pocketbot.emulator.world.Pose
+import org.pocketbot.sdk.Pose
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
 import kotlin.math.abs
@@ -14,7 +14,7 @@ import kotlin.time.Duration.Companion.seconds
 class MovementTest {
     @Test
     fun `a 10 cm straight movement ends within 2 mm of 10 cm`() = RealFirmware.emulator("straight").use { emu ->
-        val robot = emu.addRobot(pose = Pose(0.3, 0.25, 0.0)) // off the line: the surface does not matter
+        val robot = emu.addRobot(pose = Pose.ofDegrees(0.3, 0.25, 0.0)) // off the line: the surface does not matter
         TestHost(robot).use { host ->
             emu.runFor(0.2.seconds)
             val start = robot.truePose
@@ -23,7 +23,7 @@ class MovementTest {
             host.run(0.3.seconds) // let it come to rest
             val end = robot.truePose
             val h = Math.toRadians(start.headingDeg)
-            val along = (end.x - start.x) * cos(h) + (end.y - start.y) * sin(h)
+            val along = (end.xM - start.xM) * cos(h) + (end.yM - start.yM) * sin(h)
             println("straight 0.10 m: moved ${"%.2f".format(along * 1000)} mm, heading ${"%.2f".format(end.headingDeg)} deg, done=$done")
             assertTrue(done, "movement 1 did not finish in 5 s: ${robot.state().locomotion}")
             assertTrue(abs(along - 0.10) <= 0.002, "moved ${along * 1000} mm instead of 100 +- 2 mm")
@@ -32,7 +32,7 @@ class MovementTest {
 
     @Test
     fun `a 90 degree rotation ends within 3 degrees`() = RealFirmware.emulator("straight").use { emu ->
-        val robot = emu.addRobot(pose = Pose(0.3, 0.25, 0.0))
+        val robot = emu.addRobot(pose = Pose.ofDegrees(0.3, 0.25, 0.0))
         TestHost(robot).use { host ->
             emu.runFor(0.2.seconds)
             val start = robot.truePose

@@ -9,32 +9,71 @@ import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.HelloRequest
 import org.pocketbot.protocol.ProtocolInfo
 import kotlin.test.Test
+import org.pocketbot.emulator.world.Worlds
 import kotlin.test.assertEquals
 import kotlin.test.assertTrue
+import kotlin.time.Duration.Companion.days
+import kotlin.time.Duration.Companion.minutes
+import kotlin.time.Duration.Companion.nanoseconds
+import kotlin.time.Duration.Companion.seconds
 
 /** Running on the emulator's own thread (speed, pause, single step) and finding robots in process. */
 class RunModesTest {
+    /** A wall clock the test moves by hand; the emulator's loop waits on it like on the real one. */
+    private class HandClock : WallClock {
+        @Volatile var nanos = 0L
+        override fun nanoTime(): Long = nanos
+        override fun sleep(millis: Long) = Thread.sleep(1) // give the test thread the lock; time moves only by hand
+    }
+
+    /** Waits (not measures) until [condition] holds: failing means the loop stopped, whatever the machine's load. */
+    private fun eventually(what: String, condition: () -> Boolean) {
+        val deadline = System.nanoTime() + 60_000_000_000L
+        while (!condition()) {
+            check(System.nanoTime() < deadline) { "never: $what" }
+            Thread.sleep(1)
+        }
+    }
+
     @Test
-    fun `real time runs at about wall-clock speed, pause stops time and single step advances 1 ms`() = RealFirmware.emulator("round").use { emu ->
-        emu.addRobot()
-        val wall0 = System.nanoTime()
-        emu.start(Speed.Realtime(1.0))
-        Thread.sleep(500)
-        emu.pause()
-        val wallMs = (System.nanoTime() - wall0) / 1_000_000
-        Thread.sleep(50)
-        val t = emu.timeTicks
-        val simMs = SimTime.toDuration(t).inWholeMilliseconds
-        assertTrue(simMs in (wallMs / 2)..(wallMs + 50), "after $wallMs ms of real time the emulator is at $simMs ms")
-        Thread.sleep(100)
-        assertEquals(t, emu.timeTicks, "time moved while paused")
-        emu.singleStep()
-        assertEquals(t + SimTime.STEP_TICKS, emu.timeTicks)
-        emu.speed = Speed.AsFastAsPossible
-        emu.resume()
-        Thread.sleep(500)
-        emu.stop()
-        assertTrue(emu.time.inWholeMilliseconds > simMs + 1500, "as fast as possible reached only ${emu.time} in 0.5 s")
+    fun `runFor runs long spans exactly (ticks of a long span do not overflow)`() {
+        assertEquals(400L * SimTime.TICKS_PER_SECOND, SimTime.fromDuration(400.seconds))
+        assertEquals(1000L * 86_400 * SimTime.TICKS_PER_SECOND, SimTime.fromDuration(1000.days))
+        assertEquals(31L, SimTime.fromDuration(999.nanoseconds), "rounded down: 999 ns is 31.97 ticks")
+        Emulator(Worlds.load("straight"), EmulatorConfig(firmware = RealFirmware.image)).use { emu ->
+            emu.runFor(10.minutes) // no robot: the steps are cheap, the arithmetic is what is tested
+            assertEquals(SimTime.fromDuration(10.minutes), emu.timeTicks)
+        }
+    }
+
+    @Test
+    fun `real time follows the wall clock at its factor, pause stops time and single step advances 1 ms`() {
+        val clock = HandClock()
+        Emulator(Worlds.load("round"), EmulatorConfig(firmware = RealFirmware.image, wallClock = clock)).use { emu ->
+            emu.addRobot()
+            emu.start(Speed.Realtime(1.0))
+            clock.nanos += 300_000_000 // 300 ms of wall time
+            eventually("300 ms simulated") { emu.time.inWholeMilliseconds >= 300 }
+            Thread.sleep(20)
+            assertEquals(300, emu.time.inWholeMilliseconds, "real time does not run ahead of the wall clock")
+            emu.stop()
+            emu.start(Speed.Realtime(4.0)) // real time counts from the start
+            clock.nanos += 100_000_000
+            eventually("400 ms more at 4x") { emu.time.inWholeMilliseconds >= 700 }
+            Thread.sleep(20)
+            assertEquals(700, emu.time.inWholeMilliseconds, "4x the wall clock, no more")
+            emu.pause()
+            val t = emu.timeTicks
+            clock.nanos += 1_000_000_000
+            Thread.sleep(20)
+            assertEquals(t, emu.timeTicks, "time moved while paused")
+            emu.singleStep()
+            assertEquals(t + SimTime.STEP_TICKS, emu.timeTicks)
+            emu.speed = Speed.AsFastAsPossible
+            emu.resume()
+            eventually("as fast as possible runs without the wall clock") { emu.time.inWholeMilliseconds > 5_000 }
+            emu.stop()
+        }
     }
 
     @Test
@@ -46,7 +85,7 @@ class RunModesTest {
             assertEquals(listOf("PocketBot-1", "PocketBot-2", "PocketBot-3"), devices.map { it.name })
             assertEquals("emulator:3", devices[2].address)
             val t = devices[2].open()
-            t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION), 0))
+            t.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, 77L), 0))
             val hello = withTimeout(5000) {
                 var h: Hello? = null
                 while (h == null) {

@@ -4,7 +4,7 @@ import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.link.LinkSettings
-import org.pocketbot.emulator.world.Pose
+import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.world.Worlds
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.Heartbeat
@@ -92,7 +92,7 @@ class StandInWiringTest {
 
     @Test
     fun `the line sensor sees the line under the middle spots`() = emulator().use { emu ->
-        val r = emu.addRobot(pose = Pose(0.12, 0.15, 0.0))
+        val r = emu.addRobot(pose = Pose.ofDegrees(0.12, 0.15, 0.0))
         // Stop it from driving away: the stand-in drives PWM 500, so read right after boot.
         emu.step(1)
         val s = r.standInState()
@@ -103,8 +103,8 @@ class StandInWiringTest {
 
     @Test
     fun `two robots facing each other hear each other on the front receiver`() = emulator().use { emu ->
-        val a = emu.addRobot(id = 1, pose = Pose(0.3, 0.15, 0.0))
-        val b = emu.addRobot(id = 2, pose = Pose(0.4, 0.15, 180.0))
+        val a = emu.addRobot(id = 1, pose = Pose.ofDegrees(0.3, 0.15, 0.0))
+        val b = emu.addRobot(id = 2, pose = Pose.ofDegrees(0.4, 0.15, 180.0))
         emu.runFor(45.milliseconds)
         val sa = a.standInState(); val sb = b.standInState()
         assertTrue(sa.irHeard > 0 && sb.irHeard > 0, "heard ${sa.irHeard} / ${sb.irHeard}")
@@ -114,7 +114,7 @@ class StandInWiringTest {
 
     @Test
     fun `a robot facing the box hears its own reflection`() = emulator("box").use { emu ->
-        val r = emu.addRobot(id = 5, pose = Pose(0.43, 0.2, 0.0))
+        val r = emu.addRobot(id = 5, pose = Pose.ofDegrees(0.43, 0.2, 0.0))
         emu.runFor(45.milliseconds)
         val s = r.standInState()
         assertTrue(s.irHeard > 0, "no reflection heard")
@@ -128,7 +128,7 @@ class StandInWiringTest {
         val frame = Frames.encode(Heartbeat, 0)
         runBlocking { t.send(frame) }
         emu.runFor(20.milliseconds)
-        val back = runBlocking { withTimeout(1000) { t.incoming.receive() } }
+        val back = runBlocking { withTimeout(10_000) { t.incoming.receive() } }
         assertContentEquals(frame, back, "the stand-in echoes what it receives")
         assertEquals(frame.size + 2, r.standInState().rxCount, "SLIP adds two END bytes")
         t.close()
@@ -190,11 +190,27 @@ class StandInWiringTest {
         emu.runFor(20.milliseconds)
         assertEquals(0, r.standInState().rxCount, "bytes passed a link that loses everything")
         r.link = LinkSettings(latency = 3.milliseconds, jitter = 4.milliseconds)
-        val frames = List(20) { Frames.encode(org.pocketbot.protocol.MovementDone(it + 1), it) }
+        val frames = List(20) { Frames.encode(org.pocketbot.protocol.MovementDone(it + 1, 0, it * 0.01f), it) }
         runBlocking { frames.forEach { t.send(it) } }
         emu.runFor(100.milliseconds)
-        val echoed = List(20) { runBlocking { withTimeout(1000) { t.incoming.receive() } } }
+        val echoed = List(20) { runBlocking { withTimeout(10_000) { t.incoming.receive() } } }
         for (k in frames.indices) assertContentEquals(frames[k], echoed[k], "frame $k out of order or damaged")
         t.close()
+    }
+
+    @Test
+    fun `the link holds at most its buffer of host bytes and counts the rest`() = emulator().use { emu ->
+        val r = emu.addRobot()
+        r.link = LinkSettings(bufferBytes = 100)
+        r.hostSendRaw(ByteArray(60) { 1 })
+        r.hostSendRaw(ByteArray(60) { 2 }) // 40 of these fit
+        r.hostSendRaw(ByteArray(900) { 3 }) // none
+        assertEquals(920L, r.linkBytesOverflowed)
+        emu.runFor(100.milliseconds) // 100 bytes take 8.7 ms at 115200 Bd
+        assertEquals(100, r.standInState().rxCount, "what fitted reached the robot")
+        r.hostSendRaw(ByteArray(100) { 4 }) // the buffer drained: room again
+        emu.runFor(100.milliseconds)
+        assertEquals(200, r.standInState().rxCount)
+        assertEquals(920L, r.linkBytesOverflowed)
     }
 }

@@ -1,25 +1,40 @@
 package org.pocketbot.emulator
 
 import kotlinx.coroutines.runBlocking
+import org.pocketbot.protocol.Ack
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.Heartbeat
+import org.pocketbot.protocol.Hello
+import org.pocketbot.protocol.HelloRequest
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.ProtocolError
+import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.sdk.transport.Transport
+import kotlin.time.Duration
+import kotlin.time.Duration.Companion.milliseconds
 
-/** A minimal host for tests: speaks the protocol through sdk-core's codecs over an in-process transport. */
-class TestHost(val robot: RobotHandle) : AutoCloseable {
+/**
+ * A minimal host for tests: speaks the protocol through the generated codecs over an in-process transport, with
+ * its own session and sequence numbers, and keeps every packet it received (with its frame's seq).
+ */
+class TestHost(val robot: RobotHandle, val session: Long = 0x5E55_1001L, firstSeq: Int = 1) : AutoCloseable {
     val transport: Transport = robot.openTransport()
-    private var seq = 0
-    val packets = ArrayList<Packet>()
+    private var seq = firstSeq - 1
+    /** Every packet received so far, in order, with the seq of its frame. */
+    val received = ArrayList<Pair<Int, Packet>>()
+    val packets: List<Packet> get() = received.map { it.second }
     val errors = ArrayList<ProtocolError>()
 
-    /** Sends [packet]; commands that want an ack get the next sequence number. */
-    fun send(packet: Packet, acked: Boolean = true): Int {
-        val s = if (acked) { seq = seq % 255 + 1; seq } else 0
+    /** Sends [packet]; acked commands get the next sequence number (1..255) unless [seq] is given. */
+    fun send(packet: Packet, acked: Boolean = true, seq: Int? = null): Int {
+        val s = seq ?: if (acked) { this.seq = this.seq % 255 + 1; this.seq } else 0
         runBlocking { transport.send(Frames.encode(packet, s)) }
         return s
     }
+
+    /** Sends a complete frame as it is (already encoded, without SLIP). */
+    fun sendFrame(frame: ByteArray) { runBlocking { transport.send(frame) } }
 
     /** Decodes every frame that arrived so far. */
     fun drain(): List<Packet> {
@@ -27,33 +42,50 @@ class TestHost(val robot: RobotHandle) : AutoCloseable {
         while (true) {
             val frame = transport.incoming.tryReceive().getOrNull() ?: break
             when (val r = Frames.decode(frame)) {
-                is FrameResult.Decoded -> fresh += r.packet
+                is FrameResult.Decoded -> { fresh += r.packet; received += r.seq to r.packet }
                 is FrameResult.Failed -> errors += r.error
             }
         }
-        packets += fresh
         return fresh
+    }
+
+    inline fun <reified T : Packet> all(): List<T> { drain(); return packets.filterIsInstance<T>() }
+
+    /** The ack of the command sent with [seq], if it arrived. */
+    fun ackOf(seq: Int): Ack? { drain(); return received.firstOrNull { it.first == seq && it.second is Ack }?.second as Ack? }
+
+    /** hello_request with this host's session; waits for the hello (simulated time). */
+    fun hello(timeout: Duration = 500.milliseconds): Hello {
+        val before = all<Hello>().size
+        send(HelloRequest(ProtocolInfo.VERSION, session), acked = false, seq = HELLO_SEQ)
+        check(runUntil(timeout) { all<Hello>().size > before }) { "no hello within $timeout" }
+        return all<Hello>()[before]
     }
 
     /**
      * Runs the emulator for [duration] while keeping the link alive like a real host does (a heartbeat every
      * 250 ms; the firmware's link failsafe stops host-driven motion after 1 s of silence).
      */
-    fun run(duration: kotlin.time.Duration) { runUntil(duration) { false } }
+    fun run(duration: Duration) { runUntil(duration) { false } }
 
     /** Like [run], until [condition] holds (checked every 10 ms); true if it held. */
-    fun runUntil(timeout: kotlin.time.Duration, condition: () -> Boolean): Boolean {
+    fun runUntil(timeout: Duration, condition: () -> Boolean): Boolean {
         val emu = robot.emulator
         val end = emu.timeTicks + SimTime.fromDuration(timeout)
         var sinceBeat = 0
         while (emu.timeTicks < end) {
             if (condition()) return true
-            emu.runFor(kotlin.time.Duration.parse("10ms"))
+            emu.runFor(10.milliseconds)
             sinceBeat += 10
-            if (sinceBeat >= 250) { send(org.pocketbot.protocol.Heartbeat, acked = false); sinceBeat = 0 }
+            if (sinceBeat >= 250) { send(Heartbeat, acked = false); sinceBeat = 0 }
         }
         return condition()
     }
 
     override fun close() = transport.close()
+
+    companion object {
+        /** The sequence number of this host's hello_request: the robot's answer carries it. */
+        const val HELLO_SEQ: Int = 77
+    }
 }

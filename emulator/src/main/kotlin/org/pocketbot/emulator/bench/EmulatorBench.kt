@@ -2,7 +2,7 @@ package org.pocketbot.emulator.bench
 
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.EmulatorConfig
-import org.pocketbot.emulator.world.Pose
+import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.world.Tape
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
@@ -17,18 +17,22 @@ import kotlin.time.Duration.Companion.seconds
 
 /**
  * `make bench-emulator`: how fast the emulator runs fleets of line-following robots on the round track.
- * Prints `emulator robots=<N> realtime_factor=<X>` per fleet size on stdout (details on stderr).
+ * Prints per fleet size `emulator robots=<N> realtime_factor=<X>`, `emulator robots=<N> cpu_us_per_robot_ms=<X>`
+ * (CPU of the whole process per robot and simulated millisecond: the cost curve over N) and
+ * `emulator robots=<N> heap_bytes_per_robot=<X>` (live heap after a GC, less the empty emulator's) on stdout.
  * The fleet shares a floor of round tracks (thesis A.3) laid side by side, three robots per track.
  * Args: fleet sizes (default 1 10 100 1000).
  */
 public fun main(args: Array<String>) {
-    val sizes = args.mapNotNull { it.toIntOrNull() }.ifEmpty { listOf(1, 10, 100, 1000) }
+    val sizes = args.mapNotNull { it.toIntOrNull() }.ifEmpty { listOf(1, 3, 10, 30, 100, 300, 1000) }
     // Warm-up: let the JIT compile the firmware and the emulator before anything is measured.
     run(10, measureS = 40, warmS = 1)
     run(100, measureS = 2, warmS = 1)
     for (n in sizes) {
         val result = run(n)
         println("emulator robots=$n realtime_factor=${"%.2f".format(result.factor)}")
+        println("emulator robots=$n cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)}")
+        println("emulator robots=$n heap_bytes_per_robot=${result.heapBytesPerRobot}")
         System.out.flush()
         System.err.println(
             "  robots=$n simulated=${result.simulatedS}s wall=${"%.2f".format(result.wallS)}s " +
@@ -41,7 +45,17 @@ public fun main(args: Array<String>) {
 private fun loadAverage(): String =
     runCatching { java.io.File("/proc/loadavg").readText().split(' ').take(3).joinToString(",") }.getOrDefault("?")
 
-private class Result(val factor: Double, val simulatedS: Int, val wallS: Double, val onLine: Int, val threads: Int, val cpuUsPerRobotMs: Double)
+private class Result(
+    val factor: Double, val simulatedS: Int, val wallS: Double, val onLine: Int, val threads: Int,
+    val cpuUsPerRobotMs: Double, val heapBytesPerRobot: Long,
+)
+
+/** Live heap after a full collection, in bytes. */
+private fun liveHeap(): Long {
+    val rt = Runtime.getRuntime()
+    repeat(3) { System.gc() }
+    return rt.totalMemory() - rt.freeMemory()
+}
 
 private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
     val round = Worlds.load("round")
@@ -60,17 +74,19 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
         System.getProperty("pocketbot.bench.threads")?.toIntOrNull()?.let { c.copy(threads = it) } ?: c
     }
     Emulator(world, config).use { emu ->
+        val emptyHeap = liveHeap()
         val start = LineFollow(1, 0, 0f)
-        val frame = Slip.encode(Frames.encode(start, 0))
+        val frame = Slip.encode(Frames.encode(start, 1)) // acknowledged commands carry a non-zero sequence number
         for (i in 0 until n) {
             val k = i / 3
             val s = round.starts[i % 3]
-            val pose = Pose(s.x + tile * (k % cols), s.y + tile * (k / cols), s.headingDeg)
+            val pose = Pose.ofDegrees(s.xM + tile * (k % cols), s.yM + tile * (k / cols), s.headingDeg)
             val r = emu.addRobot(pose = pose)
             r.hostSendRaw(frame)
         }
         val warm = warmS ?: if (n >= 1000) 1 else 2
         emu.runFor(warm.seconds)
+        val heapPerRobot = (liveHeap() - emptyHeap) / n
         val simS = measureS ?: System.getProperty("pocketbot.bench.seconds")?.toIntOrNull() ?: when { n <= 1 -> 30; n <= 10 -> 20; n <= 100 -> 5; else -> 3 }
         val os = java.lang.management.ManagementFactory.getOperatingSystemMXBean() as com.sun.management.OperatingSystemMXBean
         val cpu0 = os.processCpuTime
@@ -83,8 +99,8 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
             val k = i / 3
             val cx = track.center.x + tile * (k % cols); val cy = track.center.y + tile * (k / cols)
             val p = r.truePose
-            if (abs(hypot(p.x - cx, p.y - cy) - track.radiusM) < 0.01 && r.trueWheelDistances.leftM > 0.2) onLine++
+            if (abs(hypot(p.xM - cx, p.yM - cy) - track.radiusM) < 0.01 && r.trueWheelDistances.leftM > 0.2) onLine++
         }
-        return Result(simS / wall, simS, wall, onLine, config.threads, cpuUs / (n * simS * 1000.0))
+        return Result(simS / wall, simS, wall, onLine, config.threads, cpuUs / (n * simS * 1000.0), heapPerRobot)
     }
 }

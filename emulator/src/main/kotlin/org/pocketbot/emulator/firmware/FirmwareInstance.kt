@@ -44,6 +44,8 @@ public object SimSensor {
  */
 public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
     private val fastMemory = System.getProperty("pocketbot.emulator.memory", "array") == "array"
+    private val sweepResult = LongArray(1)
+    private val sensorResult = LongArray(1)
 
     private val instance: Instance
     private val init: ExportFunction
@@ -52,6 +54,7 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
     private val uartRx: ExportFunction
     private val uartTxTake: ExportFunction
     private val irRx: ExportFunction
+    private val runEvents: ExportFunction
 
     /** The instance's linear memory (little-endian). */
     public val memory: Memory
@@ -62,16 +65,26 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
     public val settingsAddress: Int
     public val txBufferAddress: Int
 
+    /** Address of the event buffer that [runEvents] reads (sim_events). */
+    public val eventsAddress: Int
+
+    /** Address of the EEPROM (sim_eeprom), or -1 for a firmware without one (the stand-in). */
+    public val eepromAddress: Int
+
     init {
         val i32 = ValType.I32
         val i64 = ValType.I64
         val imports = ImportValues.builder()
             .addFunction(
+                // One result array per instance, reused: Chicory reads it before the next host call, and these
+                // calls happen several times per robot and simulated millisecond.
                 HostFunction("env", "line_adc_sweep", FunctionType.of(listOf(i32), listOf(i64))) { _, args ->
-                    longArrayOf(host.lineAdcSweep(args[0].toInt()))
+                    sweepResult[0] = host.lineAdcSweep(args[0].toInt())
+                    sweepResult
                 },
                 HostFunction("env", "sensor_read", FunctionType.of(listOf(i32), listOf(i32))) { _, args ->
-                    longArrayOf(host.sensorRead(args[0].toInt()).toLong())
+                    sensorResult[0] = host.sensorRead(args[0].toInt()).toLong()
+                    sensorResult
                 },
                 HostFunction("env", "ir_send", FunctionType.of(listOf(i32, i32, i32, i32, i32, i32), listOf())) { _, args ->
                     host.irSend(args[0].toInt(), args[1].toInt(), args[2].toInt(), args[3].toInt(), args[4].toInt(), args[5].toInt())
@@ -90,10 +103,22 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
         uartRx = instance.export("sim_uart_rx")
         uartTxTake = instance.export("sim_uart_tx_take")
         irRx = instance.export("sim_ir_rx")
+        runEvents = instance.export("sim_run_events")
+        eventsAddress = instance.export("sim_events").apply()[0].toInt()
         outputsAddress = instance.export("sim_outputs").apply()[0].toInt()
         stateAddress = instance.export("sim_state").apply()[0].toInt()
         settingsAddress = instance.export("sim_settings").apply()[0].toInt()
         txBufferAddress = instance.export("sim_uart_tx_buffer").apply()[0].toInt()
+        eepromAddress = runCatching { instance.export("sim_eeprom") }.getOrNull()?.apply()?.get(0)?.toInt() ?: -1
+    }
+
+    /** A copy of the EEPROM, or null when the firmware has none. */
+    public fun eeprom(): ByteArray? = if (eepromAddress < 0) null else memory.readBytes(eepromAddress, EEPROM_SIZE)
+
+    /** Puts an EEPROM image in place before [init] (a power cycle keeps the EEPROM). */
+    public fun loadEeprom(bytes: ByteArray) {
+        require(bytes.size == EEPROM_SIZE) { "EEPROM image of ${bytes.size} bytes, not $EEPROM_SIZE" }
+        if (eepromAddress >= 0) memory.write(eepromAddress, bytes)
     }
 
     public fun init(robotId: Int) { init.apply(robotId.toLong()) }
@@ -104,6 +129,23 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
 
     public fun uartRx(byte: Int) { uartRx.apply(byte.toLong()) }
 
+    /**
+     * Puts event [index] (0 until [EVENT_CAPACITY]) in the buffer for [runEvents]: at [ticks], a byte received
+     * ([EVENT_UART_RX], [arg] the byte) or an encoder edge ([EVENT_ENCODER_EDGE], [arg] the wheel).
+     */
+    public fun putEvent(index: Int, ticks: Long, kind: Int, arg: Int) {
+        val at = eventsAddress + index * EVENT_BYTES
+        memory.writeLong(at, ticks)
+        memory.writeI32(at + 8, kind)
+        memory.writeI32(at + 12, arg)
+    }
+
+    /**
+     * Delivers the first [count] events of the buffer in order, as [advance] and [uartRx] / [encoderEdge] would one by
+     * one, then advances to [endTicks] unless it is negative: one call into the instance instead of two per event.
+     */
+    public fun runEvents(count: Int, endTicks: Long) { runEvents.apply(count.toLong(), endTicks) }
+
     /** Takes up to [max] bytes queued for the host; they are at [txBufferAddress]. */
     public fun uartTxTake(max: Int): Int = uartTxTake.apply(max.toLong())[0].toInt()
 
@@ -111,10 +153,25 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
         irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong())
     }
 
-    public fun pwmLeft(): Int = memory.readShort(outputsAddress).toInt()
-    public fun pwmRight(): Int = memory.readShort(outputsAddress + 2).toInt()
-    public fun led(): Int = memory.read(outputsAddress + 4).toInt() and 0xff
-    public fun lineEmitters(): Int = memory.read(outputsAddress + 5).toInt() and 0xff
+    // sim_outputs_t of sim_abi.h (the emulator's own contract with the firmware, not part of the protocol).
+    public fun pwmLeft(): Int = memory.readShort(outputsAddress + OUT_PWM_LEFT).toInt()
+    public fun pwmRight(): Int = memory.readShort(outputsAddress + OUT_PWM_RIGHT).toInt()
+    public fun led(): Int = memory.read(outputsAddress + OUT_LED).toInt() and 0xff
+    public fun lineEmitters(): Int = memory.read(outputsAddress + OUT_LINE_EMITTERS).toInt() and 0xff
 
     public fun readBytes(address: Int, length: Int): ByteArray = memory.readBytes(address, length)
+
+    public companion object {
+        /** HAL_EEPROM_SIZE of hal.h. */
+        public const val EEPROM_SIZE: Int = 2048
+        /** sim_event_t of sim_abi.h: SIM_EVENT_CAPACITY events of 16 bytes, kinds SIM_EVENT_*. */
+        public const val EVENT_CAPACITY: Int = 64
+        public const val EVENT_UART_RX: Int = 0
+        public const val EVENT_ENCODER_EDGE: Int = 1
+        private const val EVENT_BYTES = 16
+        private const val OUT_PWM_LEFT = 0
+        private const val OUT_PWM_RIGHT = 2
+        private const val OUT_LED = 4
+        private const val OUT_LINE_EMITTERS = 5
+    }
 }

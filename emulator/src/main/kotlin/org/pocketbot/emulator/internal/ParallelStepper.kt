@@ -14,11 +14,16 @@ import java.util.concurrent.locks.LockSupport
  * nothing, its part is simply done by the others. Which thread ran which index must not matter to the result.
  */
 internal class ParallelStepper(val threads: Int) : AutoCloseable {
+    /** The work for index i; not a (Int) -> Unit, whose calls box every index above 127. */
+    fun interface Task {
+        fun run(i: Int)
+    }
+
     private val workers = ArrayList<Thread>()
     @Volatile private var closed = false
 
     /** One round of work; published in [job], the workers notice the new round number. */
-    private class Job(val round: Long, val task: (Int) -> Unit, count: Int, val block: Int, parts: Int) {
+    private class Job(val round: Long, val task: Task, count: Int, val block: Int, parts: Int) {
         val starts = IntArray(parts + 1) { (it.toLong() * count / parts).toInt() }
         val next = AtomicIntegerArray(parts)
     }
@@ -34,8 +39,8 @@ internal class ParallelStepper(val threads: Int) : AutoCloseable {
         }
     }
 
-    fun run(n: Int, task: (Int) -> Unit) {
-        if (threads <= 1 || n < 2) { for (i in 0 until n) task(i); return }
+    fun run(n: Int, task: Task) {
+        if (threads <= 1 || n < 2) { for (i in 0 until n) task.run(i); return }
         round++
         val j = Job(round, task, n, (n / (threads * 8)).coerceIn(1, MAX_BLOCK), threads)
         job = j
@@ -60,7 +65,7 @@ internal class ParallelStepper(val threads: Int) : AutoCloseable {
                 val start = base + j.next.getAndAdd(p, j.block)
                 if (start >= end) break
                 val stop = minOf(end, start + j.block)
-                for (i in start until stop) j.task(i)
+                for (i in start until stop) j.task.run(i)
                 if (DEBUG) done.addAndGet(home, stop - start)
             }
         }

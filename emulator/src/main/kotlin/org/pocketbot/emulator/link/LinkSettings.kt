@@ -21,10 +21,17 @@ public data class LinkSettings(
     val corruptionRate: Double = 0.0,
     /** False: the link is down (out of range): host connections are dropped and no bytes pass. */
     val connected: Boolean = true,
+    /**
+     * Host-to-robot bytes the link holds before they reach the robot (a Bluetooth SPP module's or a USB serial
+     * adapter's buffer): a host that sends faster than the baud rate fills it, and what does not fit is lost
+     * (counted in `RobotHandle.linkBytesOverflowed`) instead of piling up for minutes.
+     */
+    val bufferBytes: Int = 2048,
 ) {
     init {
         require(baud in 300..10_000_000) { "baud $baud out of range" }
         require(!latency.isNegative() && !jitter.isNegative()) { "latency and jitter must not be negative" }
         require(lossRate in 0.0..1.0 && corruptionRate in 0.0..1.0) { "rates are probabilities" }
+        require(bufferBytes >= 1) { "bufferBytes must be positive" }
     }
 }

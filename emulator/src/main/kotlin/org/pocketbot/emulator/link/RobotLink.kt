@@ -24,6 +24,9 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
         internal set
 
     private val fromHost = ConcurrentLinkedQueue<ByteArray>()
+    /** Bytes in [fromHost], and those of [toRobot] that have not reached the robot yet: the link's buffer. */
+    private val queuedFromHost = java.util.concurrent.atomic.AtomicInteger()
+    @Volatile private var inFlightToRobot = 0
     @Volatile private var connection: LinkConnection? = null
 
     /** Host -> robot bytes scheduled in simulated time. */
@@ -37,6 +40,9 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
     @Volatile public var bytesToHost: Long = 0; private set
     @Volatile public var bytesLost: Long = 0; private set
     @Volatile public var bytesCorrupted: Long = 0; private set
+    /** Host bytes dropped because the link's buffer ([LinkSettings.bufferBytes]) was full. */
+    private val overflowed = java.util.concurrent.atomic.AtomicLong()
+    public val bytesOverflowed: Long get() = overflowed.get()
     /** CRC-32 of every byte delivered to a host, in order: equal runs deliver equal bytes. */
     private val hostBytesCrc = java.util.zip.CRC32()
     public val bytesToHostCrc: Long get() = synchronized(hostBytesCrc) { hostBytesCrc.value }
@@ -60,9 +66,24 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
         old?.onLinkLost(reason)
     }
 
-    /** Queues bytes from the host (already SLIP-framed); they enter the simulated link at the next step. */
+    /**
+     * Queues bytes from the host (already SLIP-framed); they enter the simulated link at the next step. What does
+     * not fit in the link's buffer (bytes queued and on the wire but not yet at the robot) is dropped and counted,
+     * as a serial link without flow control would.
+     */
     public fun hostSend(bytes: ByteArray) {
-        if (bytes.isNotEmpty()) fromHost.add(bytes)
+        if (bytes.isEmpty()) return
+        val capacity = settings.bufferBytes
+        while (true) {
+            val queued = queuedFromHost.get()
+            val room = capacity - queued - inFlightToRobot
+            val take = minOf(bytes.size, maxOf(room, 0))
+            if (take == 0) { overflowed.addAndGet(bytes.size.toLong()); return }
+            if (!queuedFromHost.compareAndSet(queued, queued + take)) continue
+            if (take < bytes.size) overflowed.addAndGet((bytes.size - take).toLong())
+            fromHost.add(if (take == bytes.size) bytes else bytes.copyOf(take))
+            return
+        }
     }
 
     internal fun applySettings(s: LinkSettings) {
@@ -71,7 +92,7 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
         if (wasUp && !s.connected) {
             val old = synchronized(this) { connection.also { connection = null } }
             old?.onLinkLost("link disconnected")
-            fromHost.clear()
+            while (true) { val chunk = fromHost.poll() ?: break; queuedFromHost.addAndGet(-chunk.size) }
         }
     }
 
@@ -90,15 +111,17 @@ public class RobotLink internal constructor(private val rng: SplittableRandom) {
         val bt = byteTicks()
         while (true) {
             val chunk = fromHost.poll() ?: break
+            queuedFromHost.addAndGet(-chunk.size)
             if (!s.connected) continue
             for (b in chunk) transmit(toRobot, b.toInt() and 0xff, now, s, bt)
         }
+        inFlightToRobot = toRobot.size
     }
 
     /** Time of the next host byte due at the robot, or Long.MAX_VALUE. */
     internal fun nextRxTime(): Long = toRobot.nextTime()
 
-    internal fun popRx(): Int = toRobot.pop()
+    internal fun popRx(): Int = toRobot.pop().also { inFlightToRobot = toRobot.size }
 
     /** How many bytes the UART may take from the firmware in a step of [stepTicks] at the link's baud rate. */
     internal fun txAllowance(stepTicks: Long): Int {
@@ -147,6 +170,8 @@ private class TimedBytes(capacity: Int) {
     private var bytes = ByteArray(capacity)
     private var head = 0
     private var count = 0
+
+    val size: Int get() = count
 
     /** When the line has finished sending what it was handed so far, and when its last byte arrives. */
     var lineFree = 0L

@@ -9,6 +9,7 @@ import org.pocketbot.emulator.link.RobotLink
 import org.pocketbot.protocol.Slip
 import org.pocketbot.protocol.SlipDecoder
 import org.pocketbot.sdk.transport.Discoverer
+import org.pocketbot.sdk.transport.LinkRate
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.Transport
 import org.pocketbot.sdk.transport.TransportLostException
@@ -75,6 +76,10 @@ public class InProcessDevice internal constructor(
     private val link: RobotLink,
 ) : RobotDevice {
     override suspend fun open(): Transport = InProcessTransport(link, address)
+
+    /** The simulated link's baud rate as it is set now ([org.pocketbot.emulator.RobotHandle.link]). */
+    override val linkRate: LinkRate get() = LinkRate.ofBaud(link.settings.baud)
+
     override fun toString(): String = "$name ($address)"
 }
 

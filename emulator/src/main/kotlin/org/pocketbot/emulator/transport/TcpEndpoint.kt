@@ -5,52 +5,47 @@ import org.pocketbot.emulator.link.RobotLink
 import java.io.IOException
 import java.net.InetAddress
 import java.net.InetSocketAddress
-import java.net.ServerSocket
 import java.net.Socket
 import java.util.concurrent.LinkedBlockingQueue
 
 /**
- * A robot reachable like a real one: a TCP server on 127.0.0.1 whose byte stream is the robot's serial link
- * (SLIP frames, through the link model). One host at a time; a new connection takes the robot over.
+ * A robot reachable like a real one: a TCP server on [listen] (see [ListenAddress]) whose byte stream is the robot's
+ * serial link (SLIP frames, through the link model). One host at a time; a new connection takes the robot over.
  */
-internal class TcpEndpoint(private val link: RobotLink, port: Int, private val label: String) : AutoCloseable {
-    private val server = ServerSocket().apply {
-        reuseAddress = true
-        bind(InetSocketAddress(InetAddress.getLoopbackAddress(), port), 8)
-    }
-    val port: Int = server.localPort
-    @Volatile private var closed = false
+internal class TcpEndpoint(private val link: RobotLink, listen: InetAddress, port: Int, private val label: String) : AutoCloseable {
     @Volatile private var current: Connection? = null
+    private val acceptor = Acceptor(listen, port, backlog = 8, name = "emulator-tcp-$label") { socket -> attach(socket) }
+    val port: Int = acceptor.port
 
-    init {
-        Thread({ acceptLoop() }, "emulator-tcp-$label").apply { isDaemon = true; start() }
-    }
+    /** The host connected now, or null. */
+    val client: InetSocketAddress? get() = current?.takeIf { it.isOpen }?.remote
 
-    private fun acceptLoop() {
-        while (!closed) {
-            val socket = try { server.accept() } catch (e: IOException) { if (closed) return else continue }
-            socket.tcpNoDelay = true
-            val c = Connection(socket)
-            try {
-                link.attach(c)
-            } catch (e: IllegalStateException) {
-                socket.close() // link is down: the robot is out of range
-                continue
-            }
-            current = c
-            c.start()
+    private fun attach(socket: Socket) {
+        socket.tcpNoDelay = true
+        val c = Connection(socket)
+        // Known before the link drops the host it had, which may ask who holds the robot now.
+        val before = current
+        current = c
+        try {
+            link.attach(c)
+        } catch (e: IllegalStateException) {
+            current = before
+            socket.close() // link is down: the robot is out of range
+            return
         }
+        c.start()
     }
 
     override fun close() {
-        closed = true
-        runCatching { server.close() }
+        acceptor.close()
         current?.let { it.shutdown(); link.detach(it) }
     }
 
     private inner class Connection(private val socket: Socket) : LinkConnection {
         private val out = LinkedBlockingQueue<ByteArray>()
         @Volatile private var open = true
+        val remote: InetSocketAddress? = socket.remoteSocketAddress as? InetSocketAddress
+        val isOpen: Boolean get() = open
 
         fun start() {
             Thread({ readLoop() }, "emulator-tcp-$label-rx").apply { isDaemon = true; start() }

@@ -187,6 +187,13 @@ public class Surface(world: World) {
         return best
     }
 
+    /** Distance from the point to the nearest edge of any tape, 0 or less on the tape. */
+    public fun distanceToTapeEdge(x: Double, y: Double): Double {
+        var best = Double.POSITIVE_INFINITY
+        for (p in kind.indices) best = min(best, distance(p, x, y) - halfWidth[p])
+        return best
+    }
+
     private fun cellIndex(x: Double, y: Double): Int {
         val cx = floor(x * inverseCell).toInt(); val cy = floor(y * inverseCell).toInt()
         if (cx < 0 || cy < 0 || cx >= cols || cy >= rows) return -1

@@ -2,6 +2,7 @@ package org.pocketbot.emulator.world
 
 import kotlinx.serialization.SerialName
 import kotlinx.serialization.Serializable
+import org.pocketbot.sdk.Pose
 import kotlinx.serialization.json.Json
 
 /**
@@ -21,7 +22,7 @@ public data class World(
     val tapes: List<Tape> = emptyList(),
     val boxes: List<Box> = emptyList(),
     /** Start poses of the robots, used in order by [org.pocketbot.emulator.Emulator.addRobot]. */
-    val starts: List<Pose> = emptyList(),
+    val starts: List<StartPose> = emptyList(),
 ) {
     public fun toJson(): String = json.encodeToString(serializer(), this)
 
@@ -35,9 +36,19 @@ public data class World(
 @Serializable
 public data class Point(val x: Double, val y: Double)
 
-/** A robot pose: axle midpoint and heading. */
+/**
+ * Where a robot starts, as a world file writes it: the axle midpoint (`x`, `y` in metres) and the heading (`heading_deg`,
+ * degrees counter-clockwise from +x). Everywhere else the emulator speaks [Pose], the SDK's pose type.
+ */
 @Serializable
-public data class Pose(val x: Double, val y: Double, val headingDeg: Double = 0.0)
+public data class StartPose(
+    @SerialName("x") val xM: Double,
+    @SerialName("y") val yM: Double,
+    @SerialName("headingDeg") val headingDeg: Double = 0.0,
+) {
+    /** This start as a [Pose]. */
+    public fun toPose(): Pose = Pose.ofDegrees(xM, yM, headingDeg)
+}
 
 @Serializable
 public enum class TapeColour(
@@ -53,7 +64,12 @@ public enum class TapeColour(
     @SerialName("green") GREEN(0.8, 40, 170, 60),
 }
 
-/** A strip of tape on the floor. */
+/**
+ * A strip of tape on the floor, [widthM] wide around its centre line. Its ends are round (a half disc of the
+ * tape's width, as every piece of the floor model is a segment or arc with round ends), so a gap between two
+ * tapes looks narrower than the gap between their end points by one tape width: a 15 mm gap between two 8 mm
+ * tapes is about 7 mm of white floor.
+ */
 @Serializable
 public sealed class Tape {
     public abstract val widthM: Double
