@@ -12,7 +12,17 @@ PACKAGES=(
   socat python3 python3-dbusmock dbus make
   # JVM build and the Kotlin/JS test run of sdk/core
   openjdk-17-jdk-headless maven nodejs
+  # the control panel's headless UI tests draw text (Skia finds fonts through fontconfig)
+  fontconfig fonts-dejavu-core
+  # the Android app's APK without Gradle: resources and manifest, alignment, signing and its check
+  aapt zipalign apksigner
 )
+# `ensure-deps.sh desktop`: what the control panel's window needs (a JRE with AWT, fonts); `screenshots` adds a
+# virtual display to photograph it on.
+case "${1:-}" in
+  desktop) PACKAGES+=(openjdk-17-jre) ;;
+  screenshots) PACKAGES+=(openjdk-17-jre xvfb xauth) ;;
+esac
 
 missing=()
 # One dpkg-query for all packages; unknown packages print nothing and count as missing.

@@ -7,9 +7,8 @@ import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.Speed
 import org.pocketbot.protocol.DistanceClass
 import org.pocketbot.sdk.Fleet
-import org.pocketbot.sdk.Pose
 import org.pocketbot.sdk.Robot
-import kotlin.math.PI
+import org.pocketbot.sdk.hearsRobot
 import kotlin.time.Duration.Companion.seconds
 import kotlin.time.TimeSource
 
@@ -33,8 +32,7 @@ fun main(args: Array<String>): Unit = runBlocking {
 
         val speedOf = robots.withIndex().associate { (i, r) -> r to cruise[i] }.toMutableMap()
         val drivers = robots.map { robot ->
-            val start = emulator.robot(robot.identity.robotId).truePose
-            robot.odometry.reset(Pose(start.x, start.y, start.headingDeg * PI / 180))
+            robot.odometry.reset(emulator.robot(robot.identity.robotId).truePose)
             robot.lineFollower.start(speedMps = speedOf.getValue(robot))
             launch { keepDistance(robot, speedOf.getValue(robot), yielding) { speedOf[robot] = it } }
         }
@@ -63,8 +61,8 @@ private suspend fun keepDistance(robot: Robot, cruise: Double, yielding: Double,
     var lastCloseMs = 0L
     robot.state.collect { state ->
         val ahead = state.proximity.front
-        val close = ahead.flags and 2 != 0 &&
-            DistanceClass.fromCode(ahead.distance).let { it == DistanceClass.NEAR || it == DistanceClass.MID }
+        val close = ahead.hearsRobot &&
+            ahead.distance.let { it == DistanceClass.NEAR || it == DistanceClass.MID }
         if (close) lastCloseMs = state.time.timeMs
         val slow = close || (slowed && state.time.timeMs - lastCloseMs < clearAfterMs)
         if (slow != slowed) {
@@ -82,7 +80,7 @@ private fun statusLine(robot: Robot, emulator: Emulator, speedMps: Double): Stri
     val s = robot.state.value
     val truth = emulator.robot(robot.identity.robotId).truePose
     val odo = robot.odometry.pose.value
-    val errMm = odo.distanceTo(Pose(truth.x, truth.y)) * 1000
+    val errMm = odo.distanceTo(truth) * 1000
     return "%-12s set %.2f m/s  wheels %4d/%4d mm/s  line %5d  %-9s  odometry (%.3f, %.3f) m, off truth %.1f mm  battery %d mV".format(
         robot.identity.name, speedMps, s.wheels.speedLeftMmps, s.wheels.speedRightMmps, s.line.position,
         robot.lineFollower.followStatus?.name?.lowercase() ?: "?", odo.xM, odo.yM, errMm, s.power.batteryMv,
