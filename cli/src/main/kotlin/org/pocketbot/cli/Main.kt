@@ -1,0 +1,149 @@
+package org.pocketbot.cli
+
+import com.github.ajalt.clikt.core.CliktError
+import com.github.ajalt.clikt.core.Context
+import com.github.ajalt.clikt.core.CoreCliktCommand
+import com.github.ajalt.clikt.core.UsageError
+import com.github.ajalt.clikt.core.obj
+import com.github.ajalt.clikt.core.parse
+import com.github.ajalt.clikt.core.subcommands
+import com.github.ajalt.clikt.parameters.options.default
+import com.github.ajalt.clikt.parameters.options.flag
+import com.github.ajalt.clikt.parameters.options.option
+import com.github.ajalt.clikt.parameters.options.split
+import com.github.ajalt.clikt.parameters.options.switch
+import com.github.ajalt.clikt.parameters.types.double
+import com.github.ajalt.clikt.parameters.types.int
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.TimeoutCancellationException
+import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.runBlocking
+import org.pocketbot.emulator.cli.EmulatorCommand
+import org.pocketbot.sdk.CommandRefusedException
+import org.pocketbot.sdk.CommandTimeoutException
+import org.pocketbot.sdk.ConnectFailedException
+import org.pocketbot.sdk.ProtocolMismatchException
+import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.transport.EmulatorDiscoverer
+import org.pocketbot.sdk.transport.TransportLostException
+import kotlin.system.exitProcess
+import kotlin.time.Duration.Companion.milliseconds
+
+/** The documented exit codes (README, `pocketbot --help`). */
+object Exit {
+    const val OK = 0
+    const val FAILED = 1
+    const val USAGE = 2
+    const val NO_SUCH_ROBOT = 3
+    const val REFUSED = 4
+    const val LINK_LOST = 5
+    const val VERSION_MISMATCH = 6
+    const val TIMEOUT = 7
+
+    /** The exit code for [e], the way a script can act on it. */
+    fun of(e: Throwable): Int = when (e) {
+        is NoSuchRobotException -> NO_SUCH_ROBOT
+        is CommandRefusedException -> REFUSED
+        is ProtocolMismatchException -> VERSION_MISMATCH
+        is CommandTimeoutException, is TimeoutCancellationException -> TIMEOUT
+        // A robot that is reached but never answers its hello timed out; one that cannot be reached lost its link.
+        is ConnectFailedException -> if (generateSequence(e.cause) { it.cause }.any { it is CommandTimeoutException }) TIMEOUT else LINK_LOST
+        is RobotClosedException, is TransportLostException, is LinkLostException -> LINK_LOST
+        is IllegalArgumentException -> USAGE
+        else -> FAILED
+    }
+}
+
+/** What every command shares: where to look for robots, and how to print. */
+class Globals(val format: Format, val sources: Sources) {
+    val options = RobotOptions()
+}
+
+/** `--json` / `--csv`, accepted before the command (for every command) and after it: the format, or null for the default. */
+fun CoreCliktCommand.formatOptions() = option(help = "output format: --json (one object per line) or --csv").switch("--json" to Format.JSON, "--csv" to Format.CSV)
+
+class PocketBot : CoreCliktCommand(name = "pocketbot") {
+    override fun help(context: Context) = """
+        Scripts PocketBot robots and fleets: find them, read and write their settings, watch their state and debug
+        text, move them. A robot is named by its name, its id or its address (tcp://127.0.0.1:40001 or
+        serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found.
+
+        Exit codes: 0 ok, 1 other failure, 2 usage (also an unknown setting or field), 3 no such robot,
+        4 refused by the robot, 5 link lost, 6 firmware version mismatch, 7 timeout.
+
+        Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
+    """.trimIndent()
+
+    private val format by formatOptions().default(Format.TABLE)
+    private val host by option(help = "host of the emulator's control port").default("127.0.0.1")
+    private val controlPort by option("--control-port", help = "the emulator's control port").int().default(EmulatorDiscoverer.DEFAULT_CONTROL_PORT)
+    private val sources by option("--sources", help = "where to look: emulator, serial, bluetooth (comma-separated)")
+        .split(",").default(listOf("emulator", "serial", "bluetooth"))
+    private val scanSeconds by option("--scan-seconds", help = "how long to look for robots").double().default(3.0)
+
+    override fun run() {
+        val unknown = sources - setOf("emulator", "serial", "bluetooth")
+        if (unknown.isNotEmpty()) throw UsageError("unknown source ${unknown.joinToString()}", "--sources")
+        currentContext.obj = Globals(
+            format,
+            Sources(host, controlPort, sources.toSet(), (scanSeconds * 1000).toLong().milliseconds),
+        )
+    }
+}
+
+/** Runs the command line and returns its exit code (the tests call this too, in process or through [main]). */
+fun run(args: Array<String>): Int {
+    val command = PocketBot().subcommands(
+        ScanCommand(), InfoCommand(), SettingsCommand(), StateCommand(), ConsoleCommand(),
+        MoveCommand(), StopCommand(), FollowCommand(), EmulatorCommand(),
+    )
+    return try {
+        command.parse(args)
+        Exit.OK
+    } catch (e: CliktError) {
+        // Help asked for goes to stdout; errors to stderr, where a script does not mistake them for output.
+        command.getFormattedHelp(e)?.let { if (e.printError) System.err.println(it) else println(it) }
+        if (e is UsageError) Exit.USAGE else e.statusCode
+    }
+}
+
+fun main(args: Array<String>) {
+    exitProcess(run(args))
+}
+
+/**
+ * Runs [block] with the robots a command names connected, and disconnects them afterwards. Failures become a clear
+ * line on stderr and the documented exit code.
+ */
+fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Boolean, block: suspend CoroutineScope.(List<Robot>, Output) -> Unit) {
+    if (!all && names.isEmpty()) throw UsageError("name a robot, or use --all")
+    val out = Output(format ?: globals.format)
+    val code = runBlocking {
+        val progress = Progress()
+        var robots = emptyList<Robot>()
+        try {
+            progress.show("looking for robots")
+            // Robots named by name or address end the search once all are found; ids and --all need the whole scan;
+            // robots named only by their addresses need none.
+            val found = if (!all && names.all { deviceAt(it) != null }) emptyList() else globals.sources.scan(enough = { f ->
+                !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
+            })
+            robots = connectRobots(found, names, all, globals.options, progress)
+            coroutineScope { block(robots, out) } // a failure of any robot's part surfaces as itself
+            out.flush()
+            Exit.OK
+        } catch (e: CliktError) {
+            throw e
+        } catch (e: Exception) {
+            progress.clear()
+            out.flush()
+            System.err.println("pocketbot: ${e.message ?: e}")
+            Exit.of(e)
+        } finally {
+            for (r in robots) r.disconnect()
+        }
+    }
+    if (code != Exit.OK) throw com.github.ajalt.clikt.core.ProgramResult(code)
+}

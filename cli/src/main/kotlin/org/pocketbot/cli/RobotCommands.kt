@@ -1,0 +1,420 @@
+package org.pocketbot.cli
+
+import com.github.ajalt.clikt.core.Context
+import com.github.ajalt.clikt.core.NoSuchOption
+import com.github.ajalt.clikt.core.CoreCliktCommand
+import com.github.ajalt.clikt.core.ProgramResult
+import com.github.ajalt.clikt.core.UsageError
+import com.github.ajalt.clikt.core.requireObject
+import com.github.ajalt.clikt.core.subcommands
+import com.github.ajalt.clikt.parameters.arguments.argument
+import com.github.ajalt.clikt.parameters.arguments.multiple
+import com.github.ajalt.clikt.parameters.options.default
+import com.github.ajalt.clikt.parameters.options.flag
+import com.github.ajalt.clikt.parameters.options.option
+import com.github.ajalt.clikt.parameters.options.split
+import com.github.ajalt.clikt.parameters.types.double
+import com.github.ajalt.clikt.parameters.types.int
+import com.github.ajalt.clikt.parameters.types.restrictTo
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.async
+import kotlinx.coroutines.awaitAll
+import kotlinx.coroutines.flow.channelFlow
+import kotlinx.coroutines.flow.first
+import kotlinx.coroutines.launch
+import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeoutOrNull
+import org.pocketbot.protocol.ColourMode
+import org.pocketbot.protocol.DebugModule
+import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.DebugSource
+import org.pocketbot.sdk.Movement
+import org.pocketbot.sdk.MovementOutcome
+import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.SettingField
+import org.pocketbot.sdk.StateFields
+import java.io.File
+import kotlin.time.Duration.Companion.milliseconds
+
+/**
+ * A command on one or more robots: `ROBOT ARGS...`, or `--all ARGS...` for every robot found. [extra] is how many
+ * arguments may follow the robot.
+ */
+abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : CoreCliktCommand(name) {
+    private val globals by requireObject<Globals>()
+    private val format by formatOptions()
+    private val all by option("--all", help = "every robot found").flag()
+    private val words by argument("ROBOT ARGS").multiple()
+
+    /** True when the command runs on every robot found. */
+    protected val allRobots: Boolean get() = all
+
+    /** The arguments after the robot. */
+    protected val rest: List<String> get() = if (all) words else words.drop(1)
+
+    // Negative numbers are arguments (`move R rotate -90`): Clikt hands tokens it knows no option for to the
+    // arguments, and those that are no number are refused here as the unknown options they are.
+    override val treatUnknownOptionsAsArgs: Boolean = true
+
+    override fun run() {
+        words.firstOrNull { it.startsWith("-") && it.toDoubleOrNull() == null }?.let { throw NoSuchOption(it) }
+        val names = if (all) emptyList() else listOfNotNull(words.firstOrNull())
+        if (rest.size !in extra) throw UsageError("wrong number of arguments: ${words.joinToString(" ")}")
+        try { check() } catch (e: IllegalArgumentException) { throw UsageError(e.message ?: "bad arguments") }
+        robotCommand(globals, format, names, all) { robots, out -> act(robots, out) }
+    }
+
+    /** Checks the arguments before any robot is looked for. */
+    protected open fun check() {}
+
+    protected abstract suspend fun CoroutineScope.act(robots: List<Robot>, out: Output)
+
+    /** Runs [each] on every robot at once. */
+    protected suspend fun CoroutineScope.onEach(robots: List<Robot>, each: suspend (Robot) -> Unit) =
+        robots.map { r -> async { each(r) } }.awaitAll()
+}
+
+class ScanCommand : CoreCliktCommand(name = "scan") {
+    override fun help(context: Context) = "Lists the robots every source finds, one line each.\n\nExample: pocketbot scan --json"
+    private val globals by requireObject<Globals>()
+    private val format by formatOptions()
+
+    override fun run() {
+        val out = Output(format ?: globals.format)
+        val progress = Progress()
+        progress.show("looking for robots")
+        val found = runBlocking { globals.sources.scan(problem = { System.err.println("pocketbot: $it") }) }
+        progress.clear()
+        for (f in found) out.row("name" to f.device.name, "address" to f.device.address, "source" to f.source)
+        out.flush()
+        if (found.isEmpty()) {
+            System.err.println("pocketbot: no robots found")
+            throw ProgramResult(Exit.NO_SUCH_ROBOT)
+        }
+    }
+}
+
+class InfoCommand : RobotCommand("info") {
+    override fun help(context: Context) = "Identity, firmware and protocol version, layout hash and link of a robot.\n\nExample: pocketbot info PocketBot-1"
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        for (r in robots) {
+            // The battery comes with the first full state after the handshake.
+            val state = withTimeoutOrNull(FIRST_STATE) { r.state.first { it.power.batteryMv > 0 } } ?: r.state.value
+            val id = r.identity
+            val stats = r.linkStats.value
+            out.row(
+                "name" to id.name, "id" to id.robotId, "address" to id.address, "firmware" to id.firmwareVersion,
+                "protocol" to id.protocolVersion, "layout" to "0x" + id.layoutHash.toString(16).uppercase(),
+                "battery_v" to state.power.batteryMv / 1000.0, "frames_in" to stats.framesReceived, "frames_out" to stats.framesSent,
+                "dropped" to stats.dropped, "reconnects" to stats.reconnects,
+            )
+        }
+    }
+}
+
+private val FIRST_STATE = kotlin.time.Duration.parse("2s")
+
+class SettingsCommand : CoreCliktCommand(name = "settings") {
+    override fun help(context: Context) = "Reads and writes a robot's settings by dotted name (line_pid.kp).\n\nExample: pocketbot settings list PocketBot-1"
+    override fun run() {}
+
+    init {
+        subcommands(SettingsList(), SettingsGet(), SettingsSet(), SettingsSave(), SettingsDefaults(), SettingsExport(), SettingsImport())
+    }
+}
+
+private fun field(robot: Robot, name: String): SettingField<*> =
+    robot.settings[name] ?: throw IllegalArgumentException("no setting '$name' (see: pocketbot settings list)")
+
+/** The value as people read it: a binary32 setting without the digits its rounding adds (0.0004, not 3.9999999E-4). */
+private fun shown(f: SettingField<*>): Any? = (f.value as? Double)?.toFloat()?.toString()?.toDouble() ?: f.value
+
+private fun range(f: SettingField<*>): String = if (f.min != null && f.max != null) "${num(f.min!!)}..${num(f.max!!)}" else ""
+private fun num(d: Double): String = if (d == Math.rint(d)) d.toLong().toString() else d.toString()
+
+class SettingsList : RobotCommand("list", 0..1) {
+    override fun help(context: Context) = "Every setting (or those of a GROUP) with value, unit, range and what it does.\n\nExample: pocketbot settings list PocketBot-1 line_pid"
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        val group = rest.firstOrNull()
+        for (r in robots) {
+            val fields = r.settings.fields.filter { group == null || it.name.startsWith("$group.") || it.name == group }
+            if (fields.isEmpty()) throw IllegalArgumentException("no settings group '$group'")
+            for (f in fields) {
+                out.row(linkedMapOf("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to range(f), "doc" to f.doc)
+                    .also { if (robots.size == 1) it.remove("robot") })
+            }
+        }
+    }
+}
+
+class SettingsGet : RobotCommand("get", 1..Int.MAX_VALUE) {
+    override fun help(context: Context) = "The value of each NAME.\n\nExample: pocketbot settings get PocketBot-1 line_pid.kp line_pid.kd"
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        for (r in robots) for (name in rest) {
+            val f = field(r, name)
+            out.row("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit)
+        }
+    }
+}
+
+class SettingsSet : RobotCommand("set", 2..2) {
+    override fun help(context: Context) = """
+        Writes NAME = VALUE (that field only) and reports the robot's acknowledgement, or its refusal (exit 4).
+
+        Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
+    """.trimIndent()
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        val (name, text) = rest
+        onEach(robots) { r ->
+            @Suppress("UNCHECKED_CAST")
+            val f = field(r, name) as SettingField<Any>
+            val value = f.parse(text)
+            f.set(value)
+            out.row("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "status" to "acknowledged")
+        }
+    }
+}
+
+class SettingsSave : RobotCommand("save") {
+    override fun help(context: Context) = "Saves the robot's settings to its EEPROM (they survive a reset).\n\nExample: pocketbot settings save --all"
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
+        r.settings.save()
+        out.row("robot" to r.identity.name, "status" to "saved")
+    }.let { }
+}
+
+class SettingsDefaults : RobotCommand("defaults") {
+    override fun help(context: Context) = "Loads the firmware's default settings (not saved until 'settings save').\n\nExample: pocketbot settings defaults PocketBot-1"
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
+        r.settings.loadDefaults()
+        out.row("robot" to r.identity.name, "status" to "defaults loaded")
+    }.let { }
+}
+
+/** With --all, settings files live in a directory, one per robot, named after the robot. */
+private fun fileOf(dir: File, robot: Robot): File = File(dir, robot.identity.name.replace(Regex("[^A-Za-z0-9._-]"), "_") + ".json")
+
+class SettingsExport : RobotCommand("export", 0..1) {
+    override fun help(context: Context) = """
+        Writes every setting as JSON to FILE, or to stdout. With --all, writes one file per robot into the directory
+        DIR, named after the robot (DIR/PocketBot-1.json): a robot's settings include its id and name, so robots
+        never share one file.
+
+        Example: pocketbot settings export PocketBot-1 robot1.json
+    """.trimIndent()
+
+    override fun check() {
+        if (allRobots && rest.isEmpty()) throw UsageError("with --all, name a directory: one file per robot goes into it")
+    }
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        val target = rest.firstOrNull()?.let(::File)
+        if (!allRobots) {
+            val json = robots.single().settings.exportJson()
+            if (target == null) println(json) else target.writeText(json)
+            return
+        }
+        target!!.mkdirs()
+        for (r in robots) {
+            val file = fileOf(target, r)
+            file.writeText(r.settings.exportJson())
+            out.row("robot" to r.identity.name, "file" to file.path)
+        }
+    }
+}
+
+class SettingsImport : RobotCommand("import", 1..1) {
+    override fun help(context: Context) = """
+        Writes the settings in the JSON FILE (the export format; settings may be left out). Nothing is written when the
+        file does not parse; when the robot refuses a value, the values written before it are put back (exit 4).
+        With --all, FILE is a directory of 'settings export --all': each robot gets its own file, and nothing is
+        written unless every robot has one.
+
+        Example: pocketbot settings import PocketBot-1 robot1.json
+    """.trimIndent()
+
+    private val path by lazy { File(rest.single()) }
+
+    override fun check() {
+        if (allRobots && !path.isDirectory) throw UsageError("with --all, name the directory 'settings export --all' wrote")
+        if (!allRobots && !path.isFile) throw UsageError("no file ${path.path}")
+    }
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        val texts = robots.associateWith { r ->
+            val file = if (allRobots) fileOf(path, r) else path
+            if (!file.isFile) throw IllegalArgumentException("no settings file ${file.path} for ${r.identity.name}")
+            file.readText()
+        }
+        onEach(robots) { r ->
+            val before = r.settings.exportJson()
+            val written = try {
+                r.settings.importJson(texts.getValue(r))
+            } catch (e: org.pocketbot.sdk.SettingRefusedException) {
+                r.settings.importJson(before)
+                throw e
+            }
+            out.row("robot" to r.identity.name, "written" to written, "status" to "imported")
+        }
+    }
+}
+
+class StateCommand : RobotCommand("state") {
+    override fun help(context: Context) = """
+        Prints the robot's state once, or with --watch every state the robot sends (at --rate HZ) until stopped.
+        --fields picks fields or groups (wheels, line.position, ...).
+
+        Example: pocketbot state PocketBot-1 --watch --rate 20 --fields time.time_ms,wheels --csv
+    """.trimIndent()
+
+    private val watch by option("--watch", help = "keep printing until Ctrl-C (or --seconds)").flag()
+    private val rate by option("--rate", help = "states per second while watching (full state, 1..100)").int().restrictTo(1..100).default(10)
+    private val seconds by option("--seconds", help = "stop watching after this many seconds").double()
+    private val fields by option("--fields", help = "comma-separated fields or groups").split(",")
+
+    private val selected by lazy { StateFields.select(fields ?: StateFields.all.map { it.name }) }
+
+    override fun check() {
+        selected // an unknown field is a usage error before any robot is looked for
+    }
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        fun print(r: Robot) = out.row(linkedMapOf<String, Any?>("robot" to r.identity.name).apply {
+            val s = r.state.value
+            for (f in selected) put(f.name, f.of(s))
+        })
+        if (!watch) {
+            robots.forEach(::print)
+            return
+        }
+        onEach(robots) { r -> r.reflector.set(SyncMode.FULL, (1000 / rate).milliseconds) }
+        out.stream(linkedMapOf("robot" to robots.maxOf { it.identity.name.length }) + selected.associate { it.name to it.width })
+        withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
+            val printers = robots.map { r -> launch { r.stateUpdates.collect { print(r) } } }
+            val gone = firstLost(robots)
+            printers.forEach { it.cancel() }
+            throw LinkLostException("lost the link to ${gone.identity.name}: ${gone.connection.value}")
+        }
+    }
+}
+
+/** Suspends until one of [robots] loses its link, and returns that one. */
+private suspend fun firstLost(robots: List<Robot>): Robot = channelFlow {
+    for (r in robots) launch { r.connection.first { it is ConnectionState.Lost || it is ConnectionState.Closed }; send(r) }
+}.first()
+
+class ConsoleCommand : RobotCommand("console") {
+    override fun help(context: Context) = """
+        Prints the robot's debug text (and the SDK's messages about its link) until stopped. --level sets the robot's
+        debug level first (1 errors, 2 info, 3 verbose, 4 trace).
+
+        Example: pocketbot console PocketBot-1 --level 3
+    """.trimIndent()
+
+    private val level by option("--level", help = "the robot's debug level, 1..4").int().restrictTo(1..4)
+    private val seconds by option("--seconds", help = "stop after this many seconds").double()
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        level?.let { l -> onEach(robots) { it.settings.debug.level.set(l) } }
+        out.stream(linkedMapOf(
+            "robot" to robots.maxOf { it.identity.name.length }, "level" to 1,
+            "source" to (DebugModule.entries + DebugSource.entries).maxOf { it.name.length }, "text" to 0,
+        ))
+        withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
+            val printers = robots.map { r ->
+                launch { r.debugLog.messages.collect { m -> out.row("robot" to r.identity.name, "level" to m.level, "source" to (m.module?.name?.lowercase() ?: m.source.name.lowercase()), "text" to m.text) } }
+            }
+            val gone = firstLost(robots)
+            printers.forEach { it.cancel() }
+            throw LinkLostException("lost the link to ${gone.identity.name}")
+        }
+    }
+}
+
+class MoveCommand : RobotCommand("move", 2..3) {
+    override fun help(context: Context) = """
+        Queues a movement: 'straight DISTANCE_M', 'rotate ANGLE_DEG' or 'arc RADIUS_M ANGLE_DEG', at --speed m/s.
+        With --wait, returns when it ended and prints how (exit 0 only when it finished; 5 when the link failed it).
+
+        Example: pocketbot move PocketBot-1 straight 0.2 --speed 0.15 --wait
+    """.trimIndent()
+
+    private val speed by option("--speed", help = "cruise speed, m/s").double().default(0.2)
+    private val wait by option("--wait", help = "return when the movement ended").flag()
+
+    private val movement by lazy {
+        val numbers = rest.drop(1).map { it.toDoubleOrNull() ?: throw UsageError("'$it' is not a number") }
+        try {
+            when (rest.first()) {
+                "straight" -> Movement.Straight(numbers.single(), speed)
+                "rotate" -> Movement.Rotate(numbers.single(), speed)
+                "arc" -> if (numbers.size == 2) Movement.Arc(numbers[0], numbers[1], speed) else throw UsageError("arc wants RADIUS_M ANGLE_DEG")
+                else -> throw UsageError("movement is straight, rotate or arc, not '${rest.first()}'")
+            }
+        } catch (e: NoSuchElementException) {
+            throw UsageError("${rest.first()} wants one number")
+        } catch (e: IllegalArgumentException) {
+            throw UsageError(e.message ?: "bad movement")
+        }
+    }
+
+    override fun check() { movement }
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
+        val results = robots.map { r ->
+            async {
+                val handle = r.locomotion.enqueue(movement)
+                if (!wait) {
+                    out.row("robot" to r.identity.name, "id" to handle.id, "movement" to movement.toString(), "status" to "queued")
+                    null
+                } else {
+                    val result = handle.await()
+                    out.row("robot" to r.identity.name, "id" to handle.id, "movement" to movement.toString(), "outcome" to result.outcome,
+                        "done" to result.done?.toFloat()?.toString()?.toDouble(), "unit" to movement.unit) // as the robot's float says it
+                    result.outcome
+                }
+            }
+        }.awaitAll()
+        out.flush()
+        when {
+            results.any { it == MovementOutcome.FAILSAFE || it == MovementOutcome.LOST } -> throw ProgramResult(Exit.LINK_LOST)
+            results.any { it != null && it != MovementOutcome.FINISHED } -> throw ProgramResult(Exit.FAILED)
+        }
+    }
+}
+
+class StopCommand : RobotCommand("stop") {
+    override fun help(context: Context) = "Stops the robot: brakes along its profile, or with --now turns the motors off.\n\nExample: pocketbot stop --all"
+    private val now by option("--now", help = "motors off at once").flag()
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
+        r.locomotion.stop(immediate = now)
+        out.row("robot" to r.identity.name, "status" to "stopped")
+    }.let { }
+}
+
+class FollowCommand : RobotCommand("follow", 1..1) {
+    override fun help(context: Context) = """
+        'start' or 'stop' line following; --speed m/s (default: the robot's setting), --colours for colour segments
+        (red slows down, blue speeds up).
+
+        Example: pocketbot follow PocketBot-1 start --speed 0.15 --colours
+    """.trimIndent()
+
+    private val speed by option("--speed", help = "m/s").double()
+    private val colours by option("--colours", help = "colour segments mode").flag()
+
+    override fun check() {
+        if (rest.single() !in setOf("start", "stop")) throw UsageError("follow start or follow stop, not '${rest.single()}'")
+    }
+
+    override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
+        if (rest.single() == "start") r.lineFollower.start(speed, if (colours) ColourMode.SEGMENTS else ColourMode.PLAIN)
+        else r.lineFollower.stop()
+        out.row("robot" to r.identity.name, "status" to if (rest.single() == "start") "following" else "stopped")
+    }.let { }
+}

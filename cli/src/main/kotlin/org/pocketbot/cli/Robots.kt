@@ -1,0 +1,128 @@
+package org.pocketbot.cli
+
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.async
+import kotlinx.coroutines.awaitAll
+import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.flow.collect
+import kotlinx.coroutines.flow.takeWhile
+import kotlinx.coroutines.withTimeoutOrNull
+import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.connect
+import org.pocketbot.sdk.transport.BluezDiscoverer
+import org.pocketbot.sdk.transport.Discoverer
+import org.pocketbot.sdk.transport.EmulatorDiscoverer
+import org.pocketbot.sdk.transport.MergedDiscoverer
+import org.pocketbot.sdk.transport.RobotDevice
+import org.pocketbot.sdk.transport.SerialDiscoverer
+import org.pocketbot.sdk.transport.SerialRobotDevice
+import org.pocketbot.sdk.transport.TcpRobotDevice
+import java.nio.file.Files
+import java.nio.file.Paths
+import kotlin.time.Duration
+
+/** No robot answers to the name, id or address the user gave: exit code 3. */
+class NoSuchRobotException(message: String) : Exception(message)
+
+/** The robot's link went down while a command was watching it: exit code 5. */
+class LinkLostException(message: String) : Exception(message)
+
+/** A robot found by a source, and which source. */
+class Found(val device: RobotDevice, val source: String)
+
+/** Where to look for robots, as the global options say. */
+class Sources(private val host: String, private val controlPort: Int, private val kinds: Set<String>, private val timeout: Duration) {
+    private fun discoverers(): Map<String, Discoverer> = buildMap {
+        if ("emulator" in kinds) put("emulator", EmulatorDiscoverer(host, controlPort))
+        if ("serial" in kinds) put("serial", SerialDiscoverer())
+        if ("bluetooth" in kinds) put("bluetooth", BluezDiscoverer(duration = timeout))
+    }
+
+    /**
+     * Every robot the sources find within the timeout, or as soon as [enough] says the robots found so far will do;
+     * sources that cannot search are reported to [problem].
+     */
+    suspend fun scan(problem: (String) -> Unit = {}, enough: (List<Found>) -> Boolean = { false }): List<Found> {
+        val found = java.util.Collections.synchronizedList(mutableListOf<Found>())
+        val tagged = discoverers().mapValues { (name, d) ->
+            object : Discoverer {
+                override fun discover() = kotlinx.coroutines.flow.flow { d.discover().collect { found += Found(it, name); emit(it) } }
+            }
+        }
+        withTimeoutOrNull(timeout) {
+            MergedDiscoverer(tagged) { source, e -> problem("$source: ${e.message ?: e}") }.discover()
+                .takeWhile { !enough(found.toList()) }.collect()
+        }
+        return found.toList().distinctBy { it.device.address }
+    }
+}
+
+private val TCP_ADDRESS = Regex("""tcp://(\[[0-9A-Fa-f:.]+]|[^:/\[\]]+):(\d{1,5})""")
+
+/**
+ * The robot at [address] when it is one a person can type without a scan: `tcp://HOST:PORT` (an emulated robot, a
+ * serial-to-TCP bridge) or `serial:PATH`; null for anything else.
+ */
+fun deviceAt(address: String): RobotDevice? {
+    TCP_ADDRESS.matchEntire(address)?.let { m ->
+        val port = m.groupValues[2].toInt().takeIf { it in 1..65535 } ?: return null
+        return TcpRobotDevice(m.groupValues[1].removePrefix("[").removeSuffix("]"), port)
+    }
+    return address.removePrefix("serial:").takeIf { address.startsWith("serial:") && it.isNotEmpty() }?.let { SerialRobotDevice(it) }
+}
+
+/**
+ * Finds the robots [names] (each a name, an address, or a numeric id) among [found] and connects them, or every
+ * robot found with [all]. A name or address picks its device without connecting the others (an address that can be
+ * typed, see [deviceAt], needs no scan); an id needs each candidate's hello, so the candidates are connected and those
+ * that are not wanted are closed again.
+ */
+suspend fun CoroutineScope.connectRobots(found: List<Found>, names: List<String>, all: Boolean, options: RobotOptions, progress: Progress): List<Robot> {
+    if (all) {
+        if (found.isEmpty()) throw NoSuchRobotException("no robots found")
+        return connectAll(found.map { it.device }, options, progress)
+    }
+    return names.map { name ->
+        val direct = found.firstOrNull { it.device.name == name || it.device.address == name }?.device ?: deviceAt(name)
+        when {
+            direct != null -> connectAll(listOf(direct), options, progress).single()
+            name.toIntOrNull() != null -> {
+                val robots = connectAll(found.map { it.device }, options, progress)
+                val wanted = robots.firstOrNull { it.identity.robotId == name.toInt() }
+                robots.filter { it !== wanted }.forEach { it.disconnect() }
+                wanted ?: throw NoSuchRobotException("no robot with id $name among ${found.size} found")
+            }
+            else -> throw NoSuchRobotException("no robot '$name' (found: ${found.joinToString { it.device.name }.ifEmpty { "none" }})")
+        }
+    }
+}
+
+/**
+ * Connects [devices] at once. Each robot belongs to this scope (the command's); a connect that fails ends the others
+ * and surfaces as its own exception (inside a child scope, so it does not cancel the command's scope instead).
+ */
+private suspend fun CoroutineScope.connectAll(devices: List<RobotDevice>, options: RobotOptions, progress: Progress): List<Robot> {
+    val owner = this
+    var done = 0
+    progress.show("connecting 0/${devices.size}")
+    return coroutineScope {
+        devices.map { d ->
+            async { d.connect(owner, options).also { progress.show("connecting ${++done}/${devices.size}") } }
+        }.awaitAll()
+    }.also { progress.clear() }
+}
+
+/** A progress line on stderr, only when stderr is a terminal (a script's log gets none of it). */
+class Progress(private val enabled: Boolean = stderrIsTerminal()) {
+    fun show(text: String) { if (enabled) System.err.print("\r\u001b[K$text") }
+    fun clear() { if (enabled) System.err.print("\r\u001b[K") }
+
+    companion object {
+        fun stderrIsTerminal(): Boolean = try {
+            Files.readSymbolicLink(Paths.get("/proc/self/fd/2")).toString().let { it.startsWith("/dev/pts/") || it.startsWith("/dev/tty") }
+        } catch (_: Exception) {
+            false
+        }
+    }
+}
