@@ -1,0 +1,178 @@
+package org.pocketbot.desktop.ui
+
+import androidx.compose.foundation.Canvas
+import androidx.compose.foundation.layout.Arrangement
+import androidx.compose.foundation.layout.Column
+import androidx.compose.foundation.layout.Row
+import androidx.compose.foundation.layout.fillMaxWidth
+import androidx.compose.foundation.layout.width
+import androidx.compose.material3.Button
+import androidx.compose.material3.FilterChip
+import androidx.compose.material3.MaterialTheme
+import androidx.compose.material3.OutlinedButton
+import androidx.compose.material3.OutlinedTextField
+import androidx.compose.material3.Text
+import androidx.compose.runtime.Composable
+import androidx.compose.runtime.collectAsState
+import androidx.compose.runtime.getValue
+import androidx.compose.runtime.mutableStateOf
+import androidx.compose.runtime.remember
+import androidx.compose.runtime.setValue
+import androidx.compose.ui.Alignment
+import androidx.compose.ui.Modifier
+import androidx.compose.ui.geometry.Offset
+import androidx.compose.ui.geometry.Size
+import androidx.compose.ui.graphics.Color
+import androidx.compose.ui.graphics.Path
+import androidx.compose.ui.graphics.StrokeCap
+import androidx.compose.ui.graphics.drawscope.DrawScope
+import androidx.compose.ui.graphics.drawscope.Stroke
+import androidx.compose.ui.graphics.drawscope.rotate
+import androidx.compose.ui.platform.testTag
+import androidx.compose.ui.unit.dp
+import org.pocketbot.desktop.model.PanelModel
+import org.pocketbot.desktop.model.WorldSnapshot
+import org.pocketbot.emulator.world.Tape
+import org.pocketbot.emulator.world.TapeColour
+import org.pocketbot.emulator.world.World
+import org.pocketbot.sdk.Pose
+import kotlin.math.cos
+import kotlin.math.min
+import kotlin.math.sin
+
+/** Colours of the robots, by their place in the panel's list (the same in every view). */
+val robotColours = listOf(Color(0xFF1565C0), Color(0xFFD84315), Color(0xFF2E7D32), Color(0xFF6A1B9A), Color(0xFF00838F), Color(0xFFF9A825))
+
+/** Maps world metres (y up) to canvas pixels, keeping the aspect ratio. */
+class WorldFrame(val xMin: Double, val yMin: Double, val xMax: Double, val yMax: Double, size: Size) {
+    private val scale = min(size.width / (xMax - xMin), size.height / (yMax - yMin)).toFloat()
+    private val ox = (size.width - scale * (xMax - xMin).toFloat()) / 2
+    private val oy = (size.height - scale * (yMax - yMin).toFloat()) / 2
+    fun at(x: Double, y: Double) = Offset(ox + ((x - xMin) * scale).toFloat(), size.height - oy - ((y - yMin) * scale).toFloat())
+    fun length(m: Double) = (m * scale).toFloat()
+    private val size = size
+}
+
+fun tapeColour(c: TapeColour): Color = Color(c.r, c.g, c.b)
+
+/** The floor, its tapes (with their colours) and boxes. */
+fun DrawScope.drawWorld(world: World, frame: WorldFrame, boxes: List<Pose>) {
+    val floorTopLeft = frame.at(0.0, world.heightM)
+    val floorBottomRight = frame.at(world.widthM, 0.0)
+    drawRect(Color(0xFFFAFAF5), floorTopLeft, Size(floorBottomRight.x - floorTopLeft.x, floorBottomRight.y - floorTopLeft.y))
+    for (tape in world.tapes) {
+        val stroke = Stroke(width = frame.length(tape.widthM).coerceAtLeast(1.5f), cap = StrokeCap.Round)
+        val path = Path()
+        when (tape) {
+            is Tape.Polyline -> {
+                tape.points.forEachIndexed { i, p -> frame.at(p.x, p.y).let { if (i == 0) path.moveTo(it.x, it.y) else path.lineTo(it.x, it.y) } }
+                if (tape.closed) path.close()
+            }
+            is Tape.Arc -> {
+                val steps = (kotlin.math.abs(tape.sweepDeg) / 3).toInt().coerceAtLeast(2)
+                for (i in 0..steps) {
+                    val a = Math.toRadians(tape.startDeg + tape.sweepDeg * i / steps)
+                    val p = frame.at(tape.center.x + tape.radiusM * cos(a), tape.center.y + tape.radiusM * sin(a))
+                    if (i == 0) path.moveTo(p.x, p.y) else path.lineTo(p.x, p.y)
+                }
+            }
+        }
+        drawPath(path, tapeColour(tape.colour), style = stroke)
+    }
+    world.boxes.forEachIndexed { i, spec ->
+        val pose = boxes.getOrNull(i) ?: Pose.ofDegrees(spec.center.x, spec.center.y, spec.angleDeg)
+        val c = frame.at(pose.xM, pose.yM)
+        rotate(-Math.toDegrees(pose.headingRad).toFloat(), c) {
+            val w = frame.length(spec.widthM); val h = frame.length(spec.heightM)
+            drawRect(if (spec.movable) Color(0xFFBCAAA4) else Color(0xFF616161), Offset(c.x - w / 2, c.y - h / 2), Size(w, h))
+        }
+    }
+}
+
+/** A robot: a filled body for the true pose, an outline for the odometry pose; a line shows the heading. */
+fun DrawScope.drawRobot(pose: Pose, frame: WorldFrame, colour: Color, filled: Boolean) {
+    val c = frame.at(pose.xM, pose.yM)
+    val r = frame.length(ROBOT_RADIUS_M).coerceAtLeast(4f)
+    if (filled) drawCircle(colour.copy(alpha = 0.85f), r, c) else drawCircle(colour, r, c, style = Stroke(2f))
+    val tip = frame.at(pose.xM + ROBOT_RADIUS_M * 1.4 * cos(pose.headingRad), pose.yM + ROBOT_RADIUS_M * 1.4 * sin(pose.headingRad))
+    drawLine(if (filled) Color.Black else colour, c, tip, strokeWidth = 2f)
+}
+
+private const val ROBOT_RADIUS_M = 0.022
+
+/** The embedded emulator's world, live: tape, boxes, each robot's true pose and its odometry pose; and its controls. */
+@Composable
+fun WorldView(model: PanelModel) {
+    val emulator = model.emulator
+    if (emulator == null) {
+        Text("This panel runs without an embedded emulator (started with --no-emulator).")
+        return
+    }
+    val snapshot by emulator.world.collectAsState()
+    val robots by model.robots.collectAsState()
+    val paused by emulator.paused.collectAsState()
+    val speed by emulator.speed.collectAsState()
+    var worldName by remember { mutableStateOf(snapshot.world.name) }
+    var count by remember { mutableStateOf(snapshot.robots.size.toString()) }
+    Column(verticalArrangement = Arrangement.spacedBy(8.dp)) {
+        Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
+            Text("World ${snapshot.world.name} · t = %.1f s".format(snapshot.timeMs / 1000.0), style = MaterialTheme.typography.titleLarge,
+                modifier = Modifier.testTag("world-title"))
+            if (paused) Button(onClick = { emulator.resume() }, Modifier.testTag("emu-resume")) { Text("Resume") }
+            else OutlinedButton(onClick = { emulator.pause() }, Modifier.testTag("emu-pause")) { Text("Pause") }
+            OutlinedButton(onClick = { emulator.singleStep() }, Modifier.testTag("emu-step")) { Text("Step 1 ms") }
+            for (f in listOf(0.5, 1.0, 2.0, 5.0)) FilterChip(speed == f, { emulator.setSpeed(f) }, { Text("x$f") }, Modifier.testTag("emu-speed-$f"))
+        }
+        Row(horizontalArrangement = Arrangement.spacedBy(6.dp), verticalAlignment = Alignment.CenterVertically) {
+            for (name in emulator.shippedWorlds) FilterChip(worldName == name, { worldName = name }, { Text(name) }, Modifier.testTag("world-$name"))
+            OutlinedButton(onClick = { chooseFile("Open a world file", save = false)?.let { worldName = it.path } }) { Text("World file...") }
+        }
+        Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
+            OutlinedTextField(count, { count = it }, Modifier.width(110.dp).testTag("emu-robots"), singleLine = true, label = { Text("robots") })
+            Button(onClick = { model.restartEmulator(worldName, count.trim().toIntOrNull() ?: -1) }, Modifier.testTag("emu-restart")) {
+                Text("Restart with $worldName".let { if (it.length > 40) "Restart with world file" else it })
+            }
+            Text("filled: true pose · ring: odometry", style = MaterialTheme.typography.bodySmall)
+        }
+        NetworkRow(model, snapshot)
+        Canvas(Modifier.weight(1f).fillMaxWidth().testTag("world-canvas")) {
+            val w = snapshot.world
+            val frame = WorldFrame(0.0, 0.0, w.widthM, w.heightM, size)
+            drawWorld(w, frame, snapshot.boxes)
+            for (t in snapshot.robots) {
+                val index = robots.indexOfFirst { it.address == t.address }
+                val colour = robotColours[(if (index >= 0) index else t.id) % robotColours.size]
+                drawRobot(t.pose, frame, colour, filled = true)
+                if (index >= 0) drawRobot(robots[index].robot.odometry.pose.value, frame, colour, filled = false)
+            }
+        }
+    }
+}
+
+/**
+ * The embedded emulator on the network: a button that serves it, and while served, the address to type into the phone
+ * and which robots a host on the network drives now.
+ */
+@Composable
+private fun NetworkRow(model: PanelModel, snapshot: WorldSnapshot) {
+    val emulator = model.emulator ?: return
+    val serving by emulator.serving.collectAsState()
+    Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
+        val served = serving
+        if (served == null) {
+            OutlinedButton(onClick = { model.serveEmulator() }, Modifier.testTag("emu-serve")) { Text("Serve on the network") }
+            Text("so a phone (the PocketBot app) or another computer on this network drives these robots",
+                style = MaterialTheme.typography.bodySmall)
+        } else {
+            OutlinedButton(onClick = { model.stopServingEmulator() }, Modifier.testTag("emu-serve-stop")) { Text("Stop serving") }
+            Text("On the network: in the phone app, find the emulator at ${served.addresses.joinToString(" or ")}",
+                style = MaterialTheme.typography.bodyMedium, modifier = Modifier.testTag("emu-serving"))
+            val driven = snapshot.robots.filter { it.drivenFrom != null }
+            if (driven.isNotEmpty()) {
+                Text(driven.joinToString(" · ") { "robot ${it.id} driven from ${it.drivenFrom}" },
+                    style = MaterialTheme.typography.bodyMedium, color = MaterialTheme.colorScheme.primary,
+                    modifier = Modifier.testTag("emu-driven"))
+            }
+        }
+    }
+}
