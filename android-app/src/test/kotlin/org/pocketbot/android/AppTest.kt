@@ -1,0 +1,275 @@
+package org.pocketbot.android
+
+import android.Manifest
+import android.bluetooth.BluetoothAdapter
+import android.content.Intent
+import android.graphics.Color
+import android.provider.Settings
+import android.view.MotionEvent
+import android.widget.RadioButton
+import org.junit.Test
+import org.junit.runner.RunWith
+import org.pocketbot.android.model.Screen
+import org.pocketbot.android.ui.JoystickCanvas
+import org.pocketbot.protocol.LineFollowStatus
+import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.LineCalibration
+import org.pocketbot.sdk.Pose
+import org.robolectric.Shadows.shadowOf
+import org.robolectric.annotation.Config
+import org.robolectric.annotation.GraphicsMode
+import kotlin.math.PI
+import kotlin.math.abs
+import kotlin.math.atan2
+import kotlin.math.cos
+import kotlin.math.hypot
+import kotlin.math.sin
+import kotlin.test.assertEquals
+import kotlin.test.assertTrue
+import kotlin.time.Duration.Companion.milliseconds
+import kotlin.time.Duration.Companion.seconds
+
+/**
+ * The app as a person uses it: real MainActivity and views (Robolectric, native graphics), the robot the real firmware
+ * in the emulator, ground truth from the emulator's physics. Every screen is photographed into docs/images/.
+ */
+@RunWith(org.robolectric.RobolectricTestRunner::class)
+@Config(sdk = [34], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi")
+@GraphicsMode(GraphicsMode.Mode.NATIVE)
+class AppTest {
+    @Test
+    fun joystickDragDrivesTheRobotTheRightWayAndReleaseStopsIt() = withApp(world = "round") {
+        connectRobot()
+        val robot = emulator.robots.single()
+        robot.place(Pose.ofDegrees(0.4, 0.4, 0.0)) // open floor, facing +x
+        click("Drive")
+        val stick = find<JoystickCanvas>()
+        val start = robot.truePose
+
+        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
+        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.2f) // knob pushed forward
+        run(1.seconds)
+        screenshot("drive")
+        val forward = robot.truePose
+        val along = (forward.xM - start.xM) * cos(start.headingRad) + (forward.yM - start.yM) * sin(start.headingRad)
+        assertTrue(along > 0.05, "the robot drove forward ${along * 1000} mm")
+        assertTrue(abs(angle(forward.headingRad - start.headingRad)) < 10 * PI / 180, "and kept its heading: $forward")
+
+        touch(stick, MotionEvent.ACTION_MOVE, 0.8f, 0.5f) // knob to the right: turn right in place
+        var turned = 0.0
+        var heading = robot.truePose.headingRad
+        repeat(30) {
+            run(10.milliseconds)
+            turned += angle(robot.truePose.headingRad - heading)
+            heading = robot.truePose.headingRad
+        }
+        assertTrue(turned < -20 * PI / 180, "the robot turned right (clockwise): ${turned * 180 / PI} deg")
+
+        touch(stick, MotionEvent.ACTION_UP, 0.8f, 0.5f)
+        run(400.milliseconds)
+        val stopped = robot.trueWheelDistances
+        run(1.seconds)
+        val after = robot.trueWheelDistances
+        assertTrue(abs(after.leftM - stopped.leftM) + abs(after.rightM - stopped.rightM) < 0.002, "released, the robot stands: $stopped -> $after")
+        assertTrue(shows("Hold and drag the knob"), "the screen says how to drive again")
+
+        // Leaving the screen while driving stops the robot too.
+        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.2f)
+        run(300.milliseconds)
+        click("Sensor")
+        run(400.milliseconds)
+        val left = robot.trueWheelDistances
+        run(1.seconds)
+        assertTrue(abs(robot.trueWheelDistances.leftM - left.leftM) < 0.002, "leaving the joystick screen stopped the robot")
+    }
+
+    @Test
+    fun calibrationFromWrongValuesGivesValuesWithWhichTheRobotLapsTheTrack() = withApp(world = "round", limit = 150.seconds) {
+        connectRobot()
+        val robot = emulator.robots.single()
+        val session = model.session.value!!
+        val start = robot.truePose
+        session.robot.settings.lineSensor.calMin.set(List(8) { 3000 })
+        session.robot.settings.lineSensor.calMax.set(List(8) { 4000 })
+        click("Follow")
+        click("Start")
+        until("the line is lost with the wrong calibration") { session.robot.lineFollower.followStatus == LineFollowStatus.LOST }
+        robot.place(start)
+
+        click("Calibrate")
+        screenshot("calibration-start")
+        click("Sweep over the line")
+        until("the sweep is half way") { shows("Sweeping… 50") || shows("Sweeping… 66") }
+        screenshot("calibration-sweeping")
+        until("the sweep is measured", 30.seconds) { shows("Measured: every spot sees the line") }
+        click("Write to robot")
+        until("the robot acknowledged the calibration") { shows("Written: the robot uses it now") }
+        screenshot("calibration")
+        val written = LineCalibration.of(session.robot)
+        assertTrue(written.white.all { it < 200 } && written.black.all { it > 1800 }, "written $written")
+        click("Save on robot")
+        until("saved") { shows("Saved in the robot's EEPROM") }
+
+        click("Follow")
+        click("Start")
+        var turned = 0.0
+        var prev = polar(robot.truePose)
+        var worst = 0.0
+        var ms = 0
+        while (turned < 2 * PI && ms < 20_000) {
+            run(20.milliseconds)
+            ms += 20
+            val p = robot.truePose
+            turned += angle(polar(p) - prev)
+            prev = polar(p)
+            worst = maxOf(worst, abs(hypot(p.xM - 0.4, p.yM - 0.4) - 0.3))
+            if (ms == 4000) {
+                val picture = screenshot("follow")
+                // The selected colour mode looks selected: a dot in the accent colour, the other mark empty (card white).
+                val plain = markCentre(picture, view("Plain: one speed") as RadioButton)
+                val segments = markCentre(picture, view("Colour segments: red slows, blue speeds up") as RadioButton)
+                assertTrue(near(plain, ACCENT), "the selected radio button has its dot: #%06X at its centre".format(plain and 0xFFFFFF))
+                assertTrue(near(segments, Color.WHITE), "the other one has none: #%06X at its centre".format(segments and 0xFFFFFF))
+            }
+        }
+        assertTrue(turned >= 2 * PI, "a lap in 20 s: turned ${turned * 180 / PI} deg")
+        assertTrue(worst < 0.004, "the robot stayed on the tape: at most ${worst * 1000} mm off")
+        click("Path")
+        screenshot("path")
+        click("Sensor")
+        screenshot("sensor")
+    }
+
+    @Test
+    fun calibratingByHandReadsWhiteThenBlackAndWritesThem() = withApp(world = "round") {
+        connectRobot()
+        val robot = emulator.robots.single()
+        click("Calibrate")
+        click("By hand")
+        robot.place(Pose.ofDegrees(0.4, 0.4, 0.0)) // the white floor inside the circle
+        click("Read white")
+        until("white is read") { shows("Step 2 of 2: black") }
+        robot.place(Pose.ofDegrees(0.4, 0.08, 90.0)) // facing the centre: the sensor row lies along the tape
+        click("Read black")
+        until("black is read") { shows("Measured: every spot sees the line") }
+        click("Write to robot")
+        until("acknowledged") { shows("Written: the robot uses it now") }
+        val written = LineCalibration.of(model.session.value!!.robot)
+        assertTrue(written.white.all { it in 90..130 } && written.black.all { it in 1850..1950 }, "written $written")
+    }
+
+    @Test
+    fun colourModeSlowsOnRedAndSpeedsUpOnBlue() = withApp(world = "colours", limit = 60.seconds) {
+        connectRobot()
+        val robot = emulator.robots.single()
+        click("Follow")
+        click("Colour segments: red slows, blue speeds up")
+        click("Start")
+        val speeds = HashMap<String, MutableList<Double>>()
+        var prev = robot.trueWheelDistances
+        repeat(140) {
+            run(100.milliseconds)
+            val w = robot.trueWheelDistances
+            val v = ((w.leftM + w.rightM) - (prev.leftM + prev.rightM)) / 2 / 0.1
+            prev = w
+            val deg = (Math.toDegrees(polar(robot.truePose)) + 360) % 360
+            val zone = when { deg in 20.0..60.0 -> "red"; deg in 200.0..240.0 -> "blue"; deg in 100.0..160.0 || deg in 280.0..340.0 -> "black"; else -> null }
+            if (zone != null) speeds.getOrPut(zone) { ArrayList() } += v
+        }
+        val mean = speeds.mapValues { it.value.average() }
+        val settings = model.session.value!!.robot.settings.lineFollow
+        assertTrue(abs(mean.getValue("red") - settings.redSpeedMps.value) < 0.03, "on red at the red speed ${settings.redSpeedMps.value}: $mean")
+        assertTrue(abs(mean.getValue("blue") - settings.blueSpeedMps.value) < 0.05, "on blue at the blue speed ${settings.blueSpeedMps.value}: $mean")
+        assertTrue(mean.getValue("red") < mean.getValue("black") && mean.getValue("black") < mean.getValue("blue"), "red < black < blue: $mean")
+        assertTrue(find<RadioButton>().isShown)
+    }
+
+    @Test
+    fun aLinkLostMidDriveIsExplainedAndTheRobotStops() = withApp(world = "round") {
+        connectRobot()
+        val robot = emulator.robots.single()
+        robot.place(Pose.ofDegrees(0.4, 0.4, 0.0))
+        click("Drive")
+        val stick = find<JoystickCanvas>()
+        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
+        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.25f)
+        run(500.milliseconds)
+        robot.disconnectLink()
+        until("the app notices the loss") { model.session.value!!.robot.connection.value !is ConnectionState.Connected }
+        run(1500.milliseconds) // the robot's link failsafe: 1 s without the host
+        val a = robot.trueWheelDistances
+        run(1.seconds)
+        val b = robot.trueWheelDistances
+        assertTrue(abs(b.leftM - a.leftM) + abs(b.rightM - a.rightM) < 0.001, "the robot stopped on its own: $a -> $b")
+        assertTrue(shows("lost"), "the user sees the link is lost: ${texts()}")
+        assertTrue(shows("Stopped: the link was lost"), "and why the robot stopped: ${texts()}")
+        screenshot("link-lost")
+        robot.reconnectLink()
+        until("the link is back", 10.seconds) { model.session.value!!.robot.connection.value == ConnectionState.Connected }
+        run(1.seconds)
+        val c = robot.trueWheelDistances
+        run(1.seconds)
+        assertTrue(abs(robot.trueWheelDistances.leftM - c.leftM) < 0.001, "the robot does not drive off again when the link returns")
+    }
+
+    @Test
+    fun refusedPermissionAndBluetoothOffAreExplainedWithAWayOn() = withApp {
+        shadowOf(app).denyPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
+        app.bluetoothAccess.refresh()
+        launch()
+        assertTrue(shows("Android asks you to allow \"Nearby devices\""), texts().toString())
+        click("Allow Bluetooth")
+        val asked = shadowOf(activity).lastRequestedPermission
+        assertEquals(listOf(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT), asked.requestedPermissions.toList())
+        activity.onRequestPermissionsResult(asked.requestCode, asked.requestedPermissions, intArrayOf(-1, -1))
+        run(20.milliseconds)
+        assertTrue(shows("Bluetooth permission refused"), texts().toString())
+        screenshot("permission-refused")
+        // Android will not show the dialog again (the user refused it): the way on is the app's settings.
+        click("Open settings")
+        val settings = shadowOf(activity).nextStartedActivity
+        assertEquals(Settings.ACTION_APPLICATION_DETAILS_SETTINGS, settings.action)
+        assertEquals("package:org.pocketbot.android", settings.data.toString())
+
+        // Granted, but Bluetooth is off: the app asks to turn it on.
+        shadowOf(app).grantPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
+        shadowOf(BluetoothAdapter.getDefaultAdapter()).setEnabled(false)
+        app.sendBroadcast(Intent(BluetoothAdapter.ACTION_STATE_CHANGED))
+        app.bluetoothAccess.permissionsAnswered()
+        run(20.milliseconds)
+        assertTrue(shows("Bluetooth is off"), texts().toString())
+        click("Turn Bluetooth on")
+        assertEquals(BluetoothAdapter.ACTION_REQUEST_ENABLE, shadowOf(activity).nextStartedActivityForResult.intent.action)
+        // Robots are still there over the network (here: the emulator in this process).
+        click("Find robots")
+        until("the emulated robot is found without Bluetooth") { model.found.value.isNotEmpty() }
+        screenshot("robots")
+    }
+
+    @Test
+    fun rotatingThePhoneKeepsTheConnection() = withApp {
+        connectRobot()
+        val session = model.session.value!!
+        click("Follow")
+        click("Start")
+        run(1.seconds)
+        val before = activity
+        rotate()
+        assertTrue(before !== activity, "a new Activity")
+        assertEquals(session, model.session.value, "the connection outlived the Activity")
+        assertEquals(ConnectionState.Connected, session.robot.connection.value)
+        assertEquals(Screen.FOLLOW, model.screen.value)
+        assertEquals(LineFollowStatus.FOLLOWING, session.robot.lineFollower.followStatus, "the robot kept following")
+    }
+
+    private fun near(colour: Int, expected: Int): Boolean =
+        abs(Color.red(colour) - Color.red(expected)) + abs(Color.green(colour) - Color.green(expected)) + abs(Color.blue(colour) - Color.blue(expected)) < 60
+
+    private fun polar(p: Pose) = atan2(p.yM - 0.4, p.xM - 0.4)
+    private fun angle(d: Double): Double = when { d > PI -> d - 2 * PI; d < -PI -> d + 2 * PI; else -> d }
+
+    private companion object {
+        /** The theme's accent (res/values/colors.xml), which a checked radio button is drawn in. */
+        val ACCENT = Color.rgb(0xF2, 0x8C, 0x28)
+    }
+}
