@@ -1,11 +1,18 @@
 # PocketBot top-level build: make drives the firmware (C) and Maven (every JVM module).
 #
 #   make test        everything CI runs: deps, protocol check, firmware tests, mvn verify
-#   make run         build what is needed, then HelloRobot and the fleet demo ($(RUN_MAIN)) on the emulator
+#   make run         the control panel with an embedded emulator fleet; without a display, HelloRobot and the
+#                    headless fleet demo ($(RUN_MAIN)) instead
+#   make cli         builds the `pocketbot` command line: cli/target/pocketbot
+#   make apk         the Android app: android-app/target/android/pocketbot.apk, signed and checked
+#   make panel       the control panel (ARGS="--world fork --robots 5", --no-emulator, ...)
+#   make screenshots the panel under Xvfb, driven through its views: PNGs in docs/images/
 #   make hello       run the HelloRobot example
+#   make push        thesis A.2: two robots push a heavy box off the track (host-coordinated), simulated time
+#   make track       thesis A.3: three robots on a track, the behaviour in their firmware, simulated time
 #   make emulator    run the emulator CLI, e.g. make emulator ARGS="--robots 3"
 #   make jvm         mvn install of the reactor (no tests), after the firmware wasm
-#   make bench | bench-emulator | bench-sdk | fuzz | clean
+#   make bench | bench-emulator | profile-emulator | bench-sdk | bench-desktop | fuzz | clean
 
 MVN       ?= mvn -B
 # The Kotlin daemon would otherwise outlive the build (1-6 GB each).
@@ -20,9 +27,15 @@ ARGS      ?=
 
 RUN_MAIN            ?= org.pocketbot.examples.FleetDemoKt
 HELLO_MAIN          ?= org.pocketbot.examples.HelloRobotKt
+PUSH_MAIN           ?= org.pocketbot.examples.CooperativePushKt
+TRACK_MAIN          ?= org.pocketbot.examples.TrackDemoKt
 EMULATOR_MAIN       ?= org.pocketbot.emulator.cli.MainKt
 BENCH_EMULATOR_MAIN ?= org.pocketbot.emulator.bench.EmulatorBenchKt
 BENCH_SDK_MAIN      ?= org.pocketbot.bench.SdkBenchKt
+PANEL_MAIN          ?= org.pocketbot.desktop.MainKt
+BENCH_DESKTOP_MAIN  ?= org.pocketbot.desktop.bench.DesktopBenchKt
+# Skia draws in software (no GPU on CI or under Xvfb) and unpacks its native library under target/, not ~/.skiko.
+PANEL_JVM_FLAGS     ?= -Dskiko.renderApi=SOFTWARE -Dskiko.data.path=desktop-app/target/skiko
 # Jazzer: JAZZER_FUZZ=1 turns @FuzzTest from regression (seeds only) into real fuzzing; it fuzzes
 # one @FuzzTest per run, so pick it with FUZZ_TEST.
 FUZZ_TEST           ?= *FuzzTest
@@ -32,14 +45,15 @@ WASM := firmware/build/wasm/pocketbot.wasm
 
 # `make run` / `hello` / `emulator` start with plain `java -cp` from the classpath files Maven
 # writes at package time, and rebuild only when a JVM source, pom or the firmware wasm changed.
-JVM_INPUTS := $(shell find pom.xml .mvn sdk emulator examples -name target -prune -o -type f \
+JVM_INPUTS := $(shell find pom.xml .mvn sdk emulator examples desktop-app -name target -prune -o -type f \
                 \( -name '*.kt' -o -name '*.java' -o -name 'pom.xml' -o -name '*.json' \
                    -o -name 'jvm.config' -o -path '*/src/main/resources/*' \) -print 2>/dev/null)
 RUN_STAMP  := examples/target/classpath.txt
+PANEL_STAMP := desktop-app/target/classpath.txt
 cp_of       = $(1)/target/classes:$$(cat $(1)/target/classpath.txt)
 
-.PHONY: all deps firmware wasm protocol-check jvm test run hello emulator \
-        bench bench-emulator bench-sdk fuzz clean
+.PHONY: all deps firmware wasm protocol-check jvm test run hello push track emulator cli panel screenshots apk \
+        bench bench-emulator profile-emulator bench-sdk bench-desktop fuzz clean
 
 all: jvm
 
@@ -72,31 +86,94 @@ $(RUN_STAMP): $(JVM_INPUTS) $(wildcard $(WASM))
 	$(MAVEN) package -pl examples -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
+$(PANEL_STAMP): $(JVM_INPUTS) $(wildcard $(WASM))
+	$(MAVEN) package -pl desktop-app -am -DskipTests -Dpocketbot.jsgate.skip=true
+	@touch $@
+
+# The panel when there is a display to show it on; the headless demo otherwise.
 run: wasm
-	@$(MAKE) --no-print-directory $(RUN_STAMP)
-	$(JAVA) -cp "$(call cp_of,examples)" $(HELLO_MAIN)
-	$(JAVA) -cp "$(call cp_of,examples)" $(RUN_MAIN) $(ARGS)
+	@if [ -n "$$DISPLAY" ]; then $(MAKE) --no-print-directory panel; else \
+	  echo "make run: no display (DISPLAY is not set), so the headless fleet demo runs instead of the panel"; \
+	  $(MAKE) --no-print-directory $(RUN_STAMP) && \
+	  $(JAVA) -cp "$(call cp_of,examples)" $(HELLO_MAIN) && \
+	  $(JAVA) -cp "$(call cp_of,examples)" $(RUN_MAIN) $(ARGS); fi
+
+EMULATOR_STAMP := emulator/target/classpath.txt
+EMULATOR_INPUTS := $(shell find pom.xml .mvn sdk/protocol sdk/core emulator -name target -prune -o -type f \
+                     \( -name '*.kt' -o -name 'pom.xml' -o -name '*.json' -o -name 'jvm.config' \) -print 2>/dev/null)
+
+$(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM))
+	$(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true
+	@touch $@
+
+CLI_STAMP := cli/target/classpath.txt
+
+$(CLI_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(shell find cli -name target -prune -o -type f -print 2>/dev/null)
+	$(MAVEN) package -pl cli -am -DskipTests -Dpocketbot.jsgate.skip=true
+	@touch $@
+
+# A launcher script with this checkout's absolute classpath: copy or link it anywhere on the PATH.
+cli: wasm
+	@$(MAKE) --no-print-directory $(CLI_STAMP)
+	@sh cli/launcher.sh "$(JAVA)" "$(CURDIR)/cli/target/classes:$$(cat cli/target/classpath.txt)" cli/target/pocketbot
+	@echo "built cli/target/pocketbot; put it on the PATH with:"
+	@echo "  ln -sf $(CURDIR)/cli/target/pocketbot ~/.local/bin/pocketbot"
+
+# The APK without its tests (`make test` runs them, and builds and checks the APK in the same Maven run).
+apk: wasm
+	$(MAVEN) package -pl android-app -am -DskipTests -Dpocketbot.jsgate.skip=true
+	@echo "built android-app/target/android/pocketbot.apk; install it with:"
+	@echo "  adb install -r android-app/target/android/pocketbot.apk"
+
+panel: wasm
+	@bash scripts/ensure-deps.sh desktop
+	@$(MAKE) --no-print-directory $(PANEL_STAMP)
+	$(JAVA) $(PANEL_JVM_FLAGS) -cp "$(call cp_of,desktop-app)" $(PANEL_MAIN) $(ARGS)
+
+screenshots: wasm
+	@bash scripts/ensure-deps.sh screenshots
+	@$(MAKE) --no-print-directory $(PANEL_STAMP)
+	xvfb-run -a -s "-screen 0 1600x1000x24" $(JAVA) $(PANEL_JVM_FLAGS) -cp "$(call cp_of,desktop-app)" $(PANEL_MAIN) --screenshots docs/images
 
 hello: wasm
 	@$(MAKE) --no-print-directory $(RUN_STAMP)
 	$(JAVA) -cp "$(call cp_of,examples)" $(HELLO_MAIN) $(ARGS)
 
+# The multi-robot scenarios of thesis appendix A, headless against an embedded emulator on simulated time.
+push: wasm
+	@$(MAKE) --no-print-directory $(RUN_STAMP)
+	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,examples)" $(PUSH_MAIN) $(ARGS)
+
+track: wasm
+	@$(MAKE) --no-print-directory $(RUN_STAMP)
+	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,examples)" $(TRACK_MAIN) $(ARGS)
+
 emulator: wasm
-	@if [ ! -f emulator/target/classpath.txt ] || [ -n "$$(find pom.xml sdk/core emulator $(WASM) -path '*/target' -prune -o -type f \( -name '*.kt' -o -name pom.xml -o -name '*.json' -o -name '*.wasm' \) -newer emulator/target/classpath.txt -print 2>/dev/null | head -1)" ]; then \
-	  $(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true && touch emulator/target/classpath.txt; fi
+	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
 	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(EMULATOR_MAIN) $(ARGS)
 
-bench: bench-emulator bench-sdk
+bench: bench-emulator bench-sdk bench-desktop
 	$(MAKE) -C firmware bench
 
 bench-emulator: wasm
-	@if [ ! -f emulator/target/classpath.txt ] || [ -n "$$(find pom.xml sdk/core emulator $(WASM) -path '*/target' -prune -o -type f \( -name '*.kt' -o -name pom.xml -o -name '*.json' -o -name '*.wasm' \) -newer emulator/target/classpath.txt -print 2>/dev/null | head -1)" ]; then \
-	  $(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true && touch emulator/target/classpath.txt; fi
+	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
 	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
+
+# Where a robot-millisecond goes: the emulator benchmark under Java Flight Recorder (1 ms CPU samples), then the
+# samples by category (firmware, line sensor geometry, IR, collisions, physics, link, stepping). ARGS: fleet sizes.
+profile-emulator: wasm
+	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
+	$(JAVA) -XX:-DontCompileHugeMethods "-XX:StartFlightRecording=filename=emulator/target/emulator-profile.jfr,settings=profile,jdk.ExecutionSample#period=1ms" \
+	  -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(or $(ARGS),1000)
+	PATH="$$(dirname $$(readlink -f $$(command -v $(JAVA))))":$$PATH $(PYTHON) scripts/emulator-profile-breakdown.py emulator/target/emulator-profile.jfr
 
 bench-sdk: wasm
 	$(MAVEN) package -pl sdk/bench -am -DskipTests -Dpocketbot.jsgate.skip=true
 	$(JAVA) -cp "$(call cp_of,sdk/bench)" $(BENCH_SDK_MAIN) $(ARGS)
+
+bench-desktop: wasm
+	@$(MAKE) --no-print-directory $(PANEL_STAMP)
+	$(JAVA) $(PANEL_JVM_FLAGS) -Djava.awt.headless=true -cp "$(call cp_of,desktop-app)" $(BENCH_DESKTOP_MAIN) $(ARGS)
 
 fuzz: wasm
 	$(MAKE) -C firmware fuzz
