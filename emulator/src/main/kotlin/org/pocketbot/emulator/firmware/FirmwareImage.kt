@@ -4,13 +4,15 @@ import com.dylibso.chicory.runtime.Instance
 import com.dylibso.chicory.runtime.Machine
 import com.dylibso.chicory.wasm.Parser
 import com.dylibso.chicory.wasm.WasmModule
+import com.dylibso.chicory.wasm.types.OpCode
 import java.nio.file.Files
 import java.nio.file.Path
 import java.util.function.Function
 
 /**
  * A firmware build ready to instantiate: the parsed WebAssembly module and how to run it.
- * Every robot gets its own [FirmwareInstance] (own linear memory, own globals) from one image.
+ * Every robot gets its own [FirmwareInstance] (own linear memory, own globals) from one image; the code runs in one
+ * [FirmwareEngine] per thread.
  */
 public class FirmwareImage internal constructor(
     internal val module: WasmModule,
@@ -18,6 +20,31 @@ public class FirmwareImage internal constructor(
     /** Where it came from, for messages. */
     public val origin: String,
 ) {
+    /**
+     * Whether robots may share an engine: true unless the code changes tables or data segments, state an engine
+     * does not swap between robots. The compiled image carries no code to look at; it is the firmware, built by clang
+     * from C, which never does (FirmwareEngineTest checks its wasm).
+     */
+    internal val sharesEngines: Boolean = !changesTablesOrSegments(module)
+
+    private val engines = ThreadLocal.withInitial { FirmwareEngine(this) }
+
+    /** This thread's engine (for an image whose robots may share one). */
+    internal fun engine(): FirmwareEngine = engines.get()
+
+    /** After a call failed: the engine may be in the middle of something, the thread's next call builds a new one. */
+    internal fun discardEngine() = engines.remove()
+
+    /** A fresh instance's memory and mutable globals, copied into every new robot. */
+    internal val initialMemory: ByteArray
+    internal val initialGlobals: LongArray
+
+    init {
+        val fresh = FirmwareEngine(this)
+        initialMemory = fresh.memory.bytes.copyOf()
+        initialGlobals = fresh.initialGlobals()
+    }
+
     public companion object {
         private const val COMPILED_CLASS = "org.pocketbot.emulator.firmware.FirmwareModule"
 
@@ -48,5 +75,13 @@ public class FirmwareImage internal constructor(
             FirmwareImage(Parser.parse(wasm), null, origin)
 
         public fun interpreted(path: Path): FirmwareImage = interpreted(Files.readAllBytes(path), path.toString())
+
+        private val STATE_CHANGING_OPS = setOf(
+            OpCode.TABLE_SET, OpCode.TABLE_GROW, OpCode.TABLE_FILL, OpCode.TABLE_COPY, OpCode.TABLE_INIT,
+            OpCode.ELEM_DROP, OpCode.DATA_DROP,
+        )
+
+        internal fun changesTablesOrSegments(module: WasmModule): Boolean =
+            module.codeSection().functionBodies().any { body -> body.instructions().any { it.opcode() in STATE_CHANGING_OPS } }
     }
 }

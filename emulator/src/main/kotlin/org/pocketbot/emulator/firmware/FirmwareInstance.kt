@@ -1,13 +1,7 @@
 package org.pocketbot.emulator.firmware
 
-import com.dylibso.chicory.runtime.ByteArrayMemory
-import com.dylibso.chicory.runtime.ExportFunction
-import com.dylibso.chicory.runtime.HostFunction
-import com.dylibso.chicory.runtime.ImportValues
-import com.dylibso.chicory.runtime.Instance
 import com.dylibso.chicory.runtime.Memory
-import com.dylibso.chicory.wasm.types.FunctionType
-import com.dylibso.chicory.wasm.types.ValType
+import com.dylibso.chicory.wasm.types.MemoryLimits
 
 /** What the firmware imports (module "env" of firmware/hal/sim/sim_abi.h), answered by the simulated robot. */
 public interface FirmwareHost {
@@ -39,25 +33,23 @@ public object SimSensor {
 }
 
 /**
- * One robot's firmware: a Chicory instance with its own linear memory, and typed calls to the exports of
- * firmware/hal/sim/sim_abi.h. Not thread-safe: one thread at a time drives it.
+ * One robot's firmware: its own linear memory and globals, and typed calls to the exports of
+ * firmware/hal/sim/sim_abi.h, which run in the calling thread's [FirmwareEngine] (one Chicory instance per thread
+ * that every robot's firmware runs in, in turn). Not thread-safe: one thread at a time drives it.
  */
-public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
-    private val fastMemory = System.getProperty("pocketbot.emulator.memory", "array") == "array"
-    private val sweepResult = LongArray(1)
-    private val sensorResult = LongArray(1)
+public class FirmwareInstance(private val image: FirmwareImage, internal val host: FirmwareHost) {
+    /** An engine of its own when the image's robots cannot share one. */
+    private val ownEngine: FirmwareEngine? = if (image.sharesEngines) null else FirmwareEngine(image)
 
-    private val instance: Instance
-    private val init: ExportFunction
-    private val advance: ExportFunction
-    private val encoderEdge: ExportFunction
-    private val uartRx: ExportFunction
-    private val uartTxTake: ExportFunction
-    private val irRx: ExportFunction
-    private val runEvents: ExportFunction
+    internal val linear = LinearMemory(MemoryLimits(image.initialMemory.size / Memory.PAGE_SIZE)).apply {
+        bytes = image.initialMemory.copyOf()
+    }
+
+    /** The mutable globals between calls, low and high word each (see [FirmwareEngine.enter]). */
+    internal val globals: LongArray = image.initialGlobals.copyOf()
 
     /** The instance's linear memory (little-endian). */
-    public val memory: Memory
+    public val memory: Memory get() = linear
 
     /** Addresses of sim_outputs_t, robot_state and settings in [memory]. */
     public val outputsAddress: Int
@@ -72,44 +64,27 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
     public val eepromAddress: Int
 
     init {
-        val i32 = ValType.I32
-        val i64 = ValType.I64
-        val imports = ImportValues.builder()
-            .addFunction(
-                // One result array per instance, reused: Chicory reads it before the next host call, and these
-                // calls happen several times per robot and simulated millisecond.
-                HostFunction("env", "line_adc_sweep", FunctionType.of(listOf(i32), listOf(i64))) { _, args ->
-                    sweepResult[0] = host.lineAdcSweep(args[0].toInt())
-                    sweepResult
-                },
-                HostFunction("env", "sensor_read", FunctionType.of(listOf(i32), listOf(i32))) { _, args ->
-                    sensorResult[0] = host.sensorRead(args[0].toInt()).toLong()
-                    sensorResult
-                },
-                HostFunction("env", "ir_send", FunctionType.of(listOf(i32, i32, i32, i32, i32, i32), listOf())) { _, args ->
-                    host.irSend(args[0].toInt(), args[1].toInt(), args[2].toInt(), args[3].toInt(), args[4].toInt(), args[5].toInt())
-                    null
-                },
-            )
-            .build()
-        val builder = Instance.builder(image.module).withImportValues(imports)
-            .withMemoryFactory { limits -> if (fastMemory) ByteArrayMemory(limits) else com.dylibso.chicory.runtime.ByteBufferMemory(limits) }
-        image.machineFactory?.let { builder.withMachineFactory(it) }
-        instance = builder.build()
-        memory = instance.memory()
-        init = instance.export("sim_init")
-        advance = instance.export("sim_advance")
-        encoderEdge = instance.export("sim_encoder_edge")
-        uartRx = instance.export("sim_uart_rx")
-        uartTxTake = instance.export("sim_uart_tx_take")
-        irRx = instance.export("sim_ir_rx")
-        runEvents = instance.export("sim_run_events")
-        eventsAddress = instance.export("sim_events").apply()[0].toInt()
-        outputsAddress = instance.export("sim_outputs").apply()[0].toInt()
-        stateAddress = instance.export("sim_state").apply()[0].toInt()
-        settingsAddress = instance.export("sim_settings").apply()[0].toInt()
-        txBufferAddress = instance.export("sim_uart_tx_buffer").apply()[0].toInt()
-        eepromAddress = runCatching { instance.export("sim_eeprom") }.getOrNull()?.apply()?.get(0)?.toInt() ?: -1
+        fun address(name: String): Int = call { it.instance.export(name).apply()[0].toInt() }
+        eventsAddress = address("sim_events")
+        outputsAddress = address("sim_outputs")
+        stateAddress = address("sim_state")
+        settingsAddress = address("sim_settings")
+        txBufferAddress = address("sim_uart_tx_buffer")
+        eepromAddress = call { it.exportOrNull("sim_eeprom")?.apply()?.get(0)?.toInt() } ?: -1
+    }
+
+    /** Runs [block] in an engine bound to this firmware. */
+    private inline fun <T> call(block: (FirmwareEngine) -> T): T {
+        val engine = ownEngine ?: image.engine()
+        engine.enter(this)
+        try {
+            return block(engine)
+        } catch (t: Throwable) {
+            if (ownEngine == null) image.discardEngine()
+            throw t
+        } finally {
+            engine.leave(this)
+        }
     }
 
     /** A copy of the EEPROM, or null when the firmware has none. */
@@ -121,13 +96,13 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
         if (eepromAddress >= 0) memory.write(eepromAddress, bytes)
     }
 
-    public fun init(robotId: Int) { init.apply(robotId.toLong()) }
+    public fun init(robotId: Int) { call { it.init.apply(robotId.toLong()) } }
 
-    public fun advance(nowTicks: Long) { advance.apply(nowTicks) }
+    public fun advance(nowTicks: Long) { call { it.advance.apply(nowTicks) } }
 
-    public fun encoderEdge(wheel: Int, ticks: Long) { encoderEdge.apply(wheel.toLong(), ticks) }
+    public fun encoderEdge(wheel: Int, ticks: Long) { call { it.encoderEdge.apply(wheel.toLong(), ticks) } }
 
-    public fun uartRx(byte: Int) { uartRx.apply(byte.toLong()) }
+    public fun uartRx(byte: Int) { call { it.uartRx.apply(byte.toLong()) } }
 
     /**
      * Puts event [index] (0 until [EVENT_CAPACITY]) in the buffer for [runEvents]: at [ticks], a byte received
@@ -135,31 +110,31 @@ public class FirmwareInstance(image: FirmwareImage, host: FirmwareHost) {
      */
     public fun putEvent(index: Int, ticks: Long, kind: Int, arg: Int) {
         val at = eventsAddress + index * EVENT_BYTES
-        memory.writeLong(at, ticks)
-        memory.writeI32(at + 8, kind)
-        memory.writeI32(at + 12, arg)
+        linear.writeLong(at, ticks)
+        linear.writeI32(at + 8, kind)
+        linear.writeI32(at + 12, arg)
     }
 
     /**
      * Delivers the first [count] events of the buffer in order, as [advance] and [uartRx] / [encoderEdge] would one by
      * one, then advances to [endTicks] unless it is negative: one call into the instance instead of two per event.
      */
-    public fun runEvents(count: Int, endTicks: Long) { runEvents.apply(count.toLong(), endTicks) }
+    public fun runEvents(count: Int, endTicks: Long) { call { it.runEvents.apply(count.toLong(), endTicks) } }
 
     /** Takes up to [max] bytes queued for the host; they are at [txBufferAddress]. */
-    public fun uartTxTake(max: Int): Int = uartTxTake.apply(max.toLong())[0].toInt()
+    public fun uartTxTake(max: Int): Int = call { it.uartTxTake.apply(max.toLong())[0].toInt() }
 
     public fun irRx(side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
-        irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong())
+        call { it.irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong()) }
     }
 
     // sim_outputs_t of sim_abi.h (the emulator's own contract with the firmware, not part of the protocol).
-    public fun pwmLeft(): Int = memory.readShort(outputsAddress + OUT_PWM_LEFT).toInt()
-    public fun pwmRight(): Int = memory.readShort(outputsAddress + OUT_PWM_RIGHT).toInt()
-    public fun led(): Int = memory.read(outputsAddress + OUT_LED).toInt() and 0xff
-    public fun lineEmitters(): Int = memory.read(outputsAddress + OUT_LINE_EMITTERS).toInt() and 0xff
+    public fun pwmLeft(): Int = linear.readShort(outputsAddress + OUT_PWM_LEFT).toInt()
+    public fun pwmRight(): Int = linear.readShort(outputsAddress + OUT_PWM_RIGHT).toInt()
+    public fun led(): Int = linear.read(outputsAddress + OUT_LED).toInt() and 0xff
+    public fun lineEmitters(): Int = linear.read(outputsAddress + OUT_LINE_EMITTERS).toInt() and 0xff
 
-    public fun readBytes(address: Int, length: Int): ByteArray = memory.readBytes(address, length)
+    public fun readBytes(address: Int, length: Int): ByteArray = linear.readBytes(address, length)
 
     public companion object {
         /** HAL_EEPROM_SIZE of hal.h. */
