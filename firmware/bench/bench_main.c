@@ -126,8 +126,9 @@ static void one_tick(uint8_t moving, uint8_t chatter)
             }
     }
     if (chatter == CHATTER_TRACK || chatter == CHATTER_OBSTACLE) {
-        /* At the IR link's rate: robot 7 close ahead (its rear LED at 50 %) with a token hand-over for us (a new
-         * hop every 8th message: taken, answered) and robot 8 behind greeting us; or our own reflection. */
+        /* At the IR link's rate: robot 7 close ahead (its rear LED at 50 %) handing the token to us and taking it
+         * back, every message of the handshake a new step (OFFER, GIVE: we accept, take, answer; ACCEPT, TAKEN of
+         * our offer: we let go, give), and robot 8 behind greeting us; or our own reflection. */
         uint32_t ms = bench_us / 1000u;
         uint8_t me = settings.identity.robot_id;
         if (chatter == CHATTER_OBSTACLE) {
@@ -137,8 +138,12 @@ static void one_tick(uint8_t moving, uint8_t chatter)
         } else if (ms % IR_MESSAGE_MS == 0) {
             hal_ir_msg_t ahead = {7, 2, 50, 0, {0}};
             if ((ms / IR_MESSAGE_MS) % 2u) {
-                uint8_t hop = (uint8_t)(ms / (8u * IR_MESSAGE_MS));
-                hal_ir_msg_t token = {7, 2, 100, TRACK_MSG_LEN, {TRACK_MSG_TOKEN, me, hop}};
+                static const uint8_t kinds[] = {TRACK_MSG_OFFER, TRACK_MSG_GIVE, TRACK_MSG_ACCEPT, TRACK_MSG_TAKEN};
+                static uint8_t step; /* from hop 1: the scenario starts without the token */
+                uint8_t kind = kinds[step % 4u];
+                uint8_t hop = (uint8_t)(2u * (step / 4u) + (kind == TRACK_MSG_ACCEPT || kind == TRACK_MSG_TAKEN ? 2u : 1u));
+                step++;
+                hal_ir_msg_t token = {7, 2, 100, TRACK_MSG_LEN, {kind, me, hop}};
                 ahead = token;
             }
             ir_rx_isr(0, &ahead);
@@ -268,6 +273,7 @@ int main(void)
 
     settings.sync.mode = PB_SYNC_MODE_FULL;
     settings.sync.period_ms = 100;
+    settings.track.token_origin_id = 0;
     track_command(PB_TRACK_ACTION_START);
     bench_set_line_spot(3);
     run(400, 1, CHATTER_TRACK);
