@@ -107,6 +107,19 @@ static uint32_t enc_t[2];
 enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS, CHATTER_TRACK, CHATTER_OBSTACLE };
 #define IR_MESSAGE_MS 42u
 
+/* One tick's tasks with a timer reading between two (a 16-bit read each); the arithmetic comes after the tick, so
+ * that the harness adds a few cycles per task instead of a hundred. Not inlined: the harness's cycles between the
+ * tasks (the worst tick includes them) would otherwise change with the register pressure of the scenarios' scripts
+ * around it (4 more cycles a task, once). */
+static __attribute__((noinline)) void time_tasks(uint16_t *stamp)
+{
+    stamp[0] = TCNT1;
+    for (uint8_t i = 0; i < TASKS; i++) {
+        tasks[i]();
+        stamp[i + 1] = TCNT1;
+    }
+}
+
 /* One millisecond: scheduler interrupts in 100 us steps, encoder edges, then the tick, each task timed. */
 static void one_tick(uint8_t moving, uint8_t chatter)
 {
@@ -169,14 +182,8 @@ static void one_tick(uint8_t moving, uint8_t chatter)
     if (!scheduler_tick_begin())
         return;
     robot_state.time.time_ms++;
-    /* Timer readings only between the tasks (a 16-bit read each); the arithmetic comes after the tick, so
-     * that the harness adds a few cycles per task instead of a hundred. */
     uint16_t stamp[TASKS + 1];
-    stamp[0] = TCNT1;
-    for (uint8_t i = 0; i < TASKS; i++) {
-        tasks[i]();
-        stamp[i + 1] = TCNT1;
-    }
+    time_tasks(stamp);
     scheduler_tick_end();
     for (uint8_t i = 0; i < TASKS; i++) {
         uint16_t d = (uint16_t)(stamp[i + 1] - stamp[i]);
