@@ -400,18 +400,25 @@ static void answer(uint8_t kind, uint8_t to, uint8_t hop)
     t.reply_hop = hop;
 }
 
-/* The token's hand-over is a two-phase handshake (holder H with the token at hop n, X the robot close ahead):
+/* The token's hand-over is a two-phase handshake. Messages (kind, addressee, hop; hop = hand-overs so far + 1):
+ * OFFER and GIVE from the holder, ACCEPT and TAKEN in answer. A robot's states, as t keeps them:
+ *   holding      token 1, offer_to 0: shows the token, hurries to catch up with the robot ahead
+ *   offering     token 1, offer_to X (since offer_ms): OFFER(X, hop+1) every beacon
+ *   giving       token 0, giving 1, offer_to X: has let go, GIVE(X, hop+1) every beacon until X answers TAKEN
+ *   accepted     accepted_from H, accepted_hop h: answered H's offer of hop h, does not hold the token yet (a
+ *                robot still giving may accept: the token can come round to it before it hears the TAKEN it missed)
+ *   none of these: neither holds the token nor has it in its care
+ * A hand-over from H (token at hop n) to X, the robot close ahead:
  *
- *   H: OFFER(X, n+1) every beacon       X, not holding the token: answers each with ACCEPT(H, n+1) and notes
- *                                          the offer; it does not hold the token yet
- *   H hears ACCEPT: lets go of the token (token 0), then GIVE(X, n+1) every beacon
- *                                       X: a GIVE of the offer it accepted: takes the token (token 1, hop n+1,
- *                                          a visit); answers every GIVE with TAKEN(H, n+1), takes only once
- *   H hears TAKEN: the hand-over is done
+ *   H holding -> offering: OFFER(X, n+1) ...     X, not holding: answers each OFFER with ACCEPT(H, n+1); accepted
+ *   H hears X's ACCEPT(H, n+1): token 0, giving: GIVE(X, n+1) ...
+ *                                                X: the GIVE of the offer it accepted: takes the token (token 1,
+ *                                                   hop n+1, a visit); answers every GIVE with TAKEN(H, n+1)
+ *   H hears X's TAKEN(H, n+1): none of the states
  *
  * At most one robot holds the token at any instant: H lets go before it sends the first GIVE, and X takes the
  * token only from a GIVE. Between the two nobody holds it: it is on its way, in H's care. Each message names
- * its addressee; the other robots that hear it ignore it. The offer names one robot and stays with it until that
+ * its addressee; the other robots that hear it ignore it. An offer names one robot and stays with it until that
  * robot accepts or OFFER_TIMEOUT_MS pass (robots ahead change as they turn away, detour, overtake). Lost messages:
  *   OFFER or ACCEPT lost: H offers again; after the timeout it withdraws the offer, still holding the token, and
  *     offers to whichever robot is close ahead then. An ACCEPT that was not followed by GIVE gave X nothing.

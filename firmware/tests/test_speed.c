@@ -82,7 +82,7 @@ static void distance_is_extrapolated_within_a_pulse(void)
 
 /* A wheel that stopped just past a stripe edge and creeps back over it as it is driven the other way: its first
  * edge in the new direction is the same edge again, a fraction of a pulse later. That is no speed. */
-static void the_first_edge_after_a_reversal_is_no_speed(void)
+static void a_wheel_that_crosses_back_over_its_last_edge_reads_no_speed(void)
 {
     world_reset(1);
     pb_wheel_speeds_t back = {-0.10f, -0.10f}, rest = {0.0f, 0.0f}, on = {0.10f, 0.10f};
@@ -91,7 +91,7 @@ static void the_first_edge_after_a_reversal_is_no_speed(void)
     host_send(PB_PKT_WHEEL_SPEEDS, 1, &rest, sizeof rest);
     world_run_ms(300);
     CHECK(robot_state.wheels.speed_left_mmps == 0, "at rest: %d mm/s", robot_state.wheels.speed_left_mmps);
-    /* The left wheel still creeps backwards, 0.1 um before an edge. */
+    /* The left wheel still creeps backwards, 0.1 um from the edge behind it. */
     world.v[0] = -0.0005;
     world.pos[0] = world.prev_edge[0] + 1e-7;
     int32_t count = robot_state.encoders.left;
@@ -117,5 +117,5 @@ void suite_speed(void)
     RUN(measured_speed_is_smooth_over_unequal_stripes_and_times_out);
     RUN(counts_are_signed_by_the_motor_direction);
     RUN(distance_is_extrapolated_within_a_pulse);
-    RUN(the_first_edge_after_a_reversal_is_no_speed);
+    RUN(a_wheel_that_crosses_back_over_its_last_edge_reads_no_speed);
 }

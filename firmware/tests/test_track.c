@@ -17,7 +17,8 @@ static void heard_msg(int side, int sender, uint8_t kind, uint8_t to, uint8_t ho
     sim_ir_rx(side, sender, 2, 100, TRACK_MSG_LEN, (int32_t)(kind | (uint32_t)to << 8 | (uint32_t)hop << 16), 0);
 }
 
-/* The last track message the robot sent, as kind | to << 8 | hop << 16; 0 if none since the last call. */
+/* The last track message the robot sent, as kind | to << 8 | hop << 16; 0 if none since the last call (of those the
+ * world kept: 64 IR messages, about 300 ms). */
 static uint32_t sent_msg(void)
 {
     uint32_t last = 0;
