@@ -107,6 +107,19 @@ static uint32_t enc_t[2];
 enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS, CHATTER_TRACK, CHATTER_OBSTACLE };
 #define IR_MESSAGE_MS 42u
 
+/* One tick's tasks with a timer reading between two (a 16-bit read each); the arithmetic comes after the tick, so
+ * that the harness adds a few cycles per task instead of a hundred. Not inlined: the harness's cycles between the
+ * tasks (the worst tick includes them) would otherwise change with the register pressure of the scenarios' scripts
+ * around it (4 more cycles a task, once). */
+static __attribute__((noinline)) void time_tasks(uint16_t *stamp)
+{
+    stamp[0] = TCNT1;
+    for (uint8_t i = 0; i < TASKS; i++) {
+        tasks[i]();
+        stamp[i + 1] = TCNT1;
+    }
+}
+
 /* One millisecond: scheduler interrupts in 100 us steps, encoder edges, then the tick, each task timed. */
 static void one_tick(uint8_t moving, uint8_t chatter)
 {
@@ -126,8 +139,9 @@ static void one_tick(uint8_t moving, uint8_t chatter)
             }
     }
     if (chatter == CHATTER_TRACK || chatter == CHATTER_OBSTACLE) {
-        /* At the IR link's rate: robot 7 close ahead (its rear LED at 50 %) with a token hand-over for us (a new
-         * hop every 8th message: taken, answered) and robot 8 behind greeting us; or our own reflection. */
+        /* At the IR link's rate: robot 7 close ahead (its rear LED at 50 %) handing the token to us and taking it
+         * back, every message of the handshake a new step (OFFER, GIVE: we accept, take, answer; ACCEPT, TAKEN of
+         * our offer: we let go, give), and robot 8 behind greeting us; or our own reflection. */
         uint32_t ms = bench_us / 1000u;
         uint8_t me = settings.identity.robot_id;
         if (chatter == CHATTER_OBSTACLE) {
@@ -137,8 +151,12 @@ static void one_tick(uint8_t moving, uint8_t chatter)
         } else if (ms % IR_MESSAGE_MS == 0) {
             hal_ir_msg_t ahead = {7, 2, 50, 0, {0}};
             if ((ms / IR_MESSAGE_MS) % 2u) {
-                uint8_t hop = (uint8_t)(ms / (8u * IR_MESSAGE_MS));
-                hal_ir_msg_t token = {7, 2, 100, TRACK_MSG_LEN, {TRACK_MSG_TOKEN, me, hop}};
+                static const uint8_t kinds[] = {TRACK_MSG_OFFER, TRACK_MSG_GIVE, TRACK_MSG_ACCEPT, TRACK_MSG_TAKEN};
+                static uint8_t step; /* from hop 1: the scenario starts without the token */
+                uint8_t kind = kinds[step % 4u];
+                uint8_t hop = (uint8_t)(2u * (step / 4u) + (kind == TRACK_MSG_ACCEPT || kind == TRACK_MSG_TAKEN ? 2u : 1u));
+                step++;
+                hal_ir_msg_t token = {7, 2, 100, TRACK_MSG_LEN, {kind, me, hop}};
                 ahead = token;
             }
             ir_rx_isr(0, &ahead);
@@ -164,14 +182,8 @@ static void one_tick(uint8_t moving, uint8_t chatter)
     if (!scheduler_tick_begin())
         return;
     robot_state.time.time_ms++;
-    /* Timer readings only between the tasks (a 16-bit read each); the arithmetic comes after the tick, so
-     * that the harness adds a few cycles per task instead of a hundred. */
     uint16_t stamp[TASKS + 1];
-    stamp[0] = TCNT1;
-    for (uint8_t i = 0; i < TASKS; i++) {
-        tasks[i]();
-        stamp[i + 1] = TCNT1;
-    }
+    time_tasks(stamp);
     scheduler_tick_end();
     for (uint8_t i = 0; i < TASKS; i++) {
         uint16_t d = (uint16_t)(stamp[i + 1] - stamp[i]);
@@ -268,6 +280,7 @@ int main(void)
 
     settings.sync.mode = PB_SYNC_MODE_FULL;
     settings.sync.period_ms = 100;
+    settings.track.token_origin_id = 0;
     track_command(PB_TRACK_ACTION_START);
     bench_set_line_spot(3);
     run(400, 1, CHATTER_TRACK);

@@ -5,6 +5,8 @@
 #include "hal/hal.h"
 
 static volatile encoder_snapshot_t enc[2];
+/* What `last` is: no edge yet, an edge in the current direction, or the last edge before a reversal. */
+enum { LAST_NONE, LAST_SAME, LAST_ACROSS };
 static volatile uint8_t have_last[2];
 static volatile uint8_t changes[2];
 
@@ -13,7 +15,7 @@ void encoder_init(void)
     for (uint8_t w = 0; w < 2; w++) {
         memset((void *)&enc[w], 0, sizeof enc[w]);
         enc[w].dir = 1;
-        have_last[w] = 0;
+        have_last[w] = LAST_NONE;
         changes[w]++;
     }
 }
@@ -24,13 +26,19 @@ void encoder_capture_isr(uint8_t wheel, uint32_t timestamp)
         return;
     volatile encoder_snapshot_t *e = &enc[wheel];
     e->count += e->dir;
-    if (have_last[wheel]) {
+    uint32_t p = timestamp - e->last;
+    /* The first edge after a reversal: the wheel still rolls the old way (the time since the last edge is a
+     * period of that travel), or it has turned round and crossed the stripe edge it stopped just past once more.
+     * Then it comes far sooner than the last period before the reversal (a wheel slows down to turn round):
+     * no travel, no period. Taken for one, it read up to 4 m/s, and the speed controller, which never drives a
+     * wheel against its way, left that wheel unpowered until the speed timed out. */
+    if (have_last[wheel] == LAST_SAME || (have_last[wheel] == LAST_ACROSS && p >= e->period[0] / 2u)) {
         e->period[1] = e->period[0];
-        e->period[0] = timestamp - e->last;
+        e->period[0] = p;
         if (e->periods < 2)
             e->periods++;
     }
-    have_last[wheel] = 1;
+    have_last[wheel] = LAST_SAME;
     e->last = timestamp;
     e->edges++;
     changes[wheel]++;
@@ -44,6 +52,8 @@ void encoder_set_direction(uint8_t wheel, int8_t dir)
     if (enc[wheel].dir != dir) {
         enc[wheel].dir = dir;
         enc[wheel].periods = 0; /* a reversal: periods across it are no speed */
+        if (have_last[wheel] != LAST_NONE)
+            have_last[wheel] = LAST_ACROSS;
         changes[wheel]++;
     }
     hal_irq_restore(s);

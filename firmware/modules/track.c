@@ -2,6 +2,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "core/data.h"
 #include "modules/comm.h"
@@ -25,6 +26,9 @@
  *  round an obstacle) so that none of its LEDs' narrow beams points at us any more. Heard close (mid or near),
  *  it is waited for; heard far, it is approached at half speed (the token holder's boost would catch it up). */
 #define VANISH_MS 1500u
+/** An offer of the token not accepted within this long is withdrawn (the holder still has the token) and made
+ *  again, to whichever robot is close ahead then: about ten beacons, time for an answer to come back. */
+#define OFFER_TIMEOUT_MS 400u
 /** Searches for the line that meet the obstacle again before giving up. */
 #define MAX_RETRIES 3u
 /** Rounds of a search for a lost line (sweep, back up) before the robot gives up and stands still. */
@@ -92,8 +96,11 @@ static struct {
     int32_t l0, r0;     /* wheel positions at the start of the step, um */
     uint8_t created;    /* this robot created the token already */
     uint8_t hop;        /* the token's hand-overs when it came here */
-    uint8_t offer_to;   /* the robot we hand the token to, 0: none yet */
-    uint8_t taken_from, taken_hop, ack_pending; /* the hand-over we acknowledge */
+    uint8_t offer_to;   /* the robot the token is offered (then given) to, 0: none */
+    uint8_t giving;     /* let go of the token to offer_to: GIVE until it answers TAKEN */
+    uint16_t offer_ms;  /* when the offer began */
+    uint8_t accepted_from, accepted_hop; /* the offer we accepted and have not been given yet */
+    uint8_t reply, reply_to, reply_hop; /* the answer to send (ACCEPT or TAKEN), 0: none */
     uint8_t greet_to;   /* a robot close by that we have not greeted yet */
     uint8_t greet_side;
     uint8_t greeted[2]; /* per receiver: the robot greeted last while it stays in hearing */
@@ -328,8 +335,16 @@ static void follow(void)
  * greeting. */
 static void listen(void)
 {
-    if (robot_state.track.token && robot_ahead() >= PB_DISTANCE_CLASS_MID)
-        t.offer_to = robot_state.proximity.front.robot_id;
+    if (robot_state.track.token) {
+        /* An offer stays with its robot until it is accepted or withdrawn: that robot may have answered. */
+        uint16_t now = (uint16_t)robot_state.time.time_ms;
+        if (t.offer_to && (uint16_t)(now - t.offer_ms) >= OFFER_TIMEOUT_MS)
+            t.offer_to = 0;
+        if (!t.offer_to && robot_ahead() >= PB_DISTANCE_CLASS_MID) {
+            t.offer_to = robot_state.proximity.front.robot_id;
+            t.offer_ms = now;
+        }
+    }
     const pb_proximity_side_t *side = &robot_state.proximity.front;
     for (uint8_t i = 0; i < 2; i++, side = &robot_state.proximity.rear) {
         if (!(side->flags & PB_PROXIMITY_FLAG_ROBOT))
@@ -341,20 +356,26 @@ static void listen(void)
     }
 }
 
-/* One message per beacon, most urgent first: the answer to a hand-over, the hand-over, a greeting. */
+/* One message per beacon, most urgent first: an answer, the hand-over, a greeting. A robot that let go of the token
+ * goes on giving it after a stop: until TAKEN, the token is in its care. */
 static __attribute__((noinline)) void talk(void)
 {
     uint8_t msg[TRACK_MSG_LEN];
-    if (t.ack_pending) {
-        msg[0] = TRACK_MSG_TAKEN;
-        msg[1] = t.taken_from;
-        msg[2] = t.taken_hop;
+    uint8_t next = (uint8_t)(t.hop + 1u);
+    if (t.reply) {
+        msg[0] = t.reply;
+        msg[1] = t.reply_to;
+        msg[2] = t.reply_hop;
+    } else if (t.giving) {
+        msg[0] = TRACK_MSG_GIVE;
+        msg[1] = t.offer_to;
+        msg[2] = next;
     } else if (!t.active) {
         return;
     } else if (robot_state.track.token && t.offer_to) {
-        msg[0] = TRACK_MSG_TOKEN;
+        msg[0] = TRACK_MSG_OFFER;
         msg[1] = t.offer_to;
-        msg[2] = (uint8_t)(t.hop + 1u);
+        msg[2] = next;
     } else if (t.greet_to) {
         msg[0] = TRACK_MSG_GREET;
         msg[1] = t.greet_to;
@@ -364,11 +385,84 @@ static __attribute__((noinline)) void talk(void)
     }
     if (proximity_send_payload(TRACK_MSG_POWER, msg, TRACK_MSG_LEN) != PB_ERROR_CODE_NONE)
         return; /* the previous message is still going out: again next tick */
-    if (msg[0] == TRACK_MSG_TAKEN) {
-        t.ack_pending = 0;
+    if (msg[0] == t.reply) {
+        t.reply = 0;
     } else if (msg[0] == TRACK_MSG_GREET) {
         t.greeted[t.greet_side] = t.greet_to;
         t.greet_to = 0;
+    }
+}
+
+static void answer(uint8_t kind, uint8_t to, uint8_t hop)
+{
+    t.reply = kind; /* one answer waits at most: the other robot asks again */
+    t.reply_to = to;
+    t.reply_hop = hop;
+}
+
+/* The token's hand-over is a two-phase handshake. Messages (kind, addressee, hop; hop = hand-overs so far + 1):
+ * OFFER and GIVE from the holder, ACCEPT and TAKEN in answer. A robot's states, as t keeps them:
+ *   holding      token 1, offer_to 0: shows the token, hurries to catch up with the robot ahead
+ *   offering     token 1, offer_to X (since offer_ms): OFFER(X, hop+1) every beacon
+ *   giving       token 0, giving 1, offer_to X: has let go, GIVE(X, hop+1) every beacon until X answers TAKEN
+ *   accepted     accepted_from H, accepted_hop h: answered H's offer of hop h, does not hold the token yet (a
+ *                robot still giving may accept: the token can come round to it before it hears the TAKEN it missed)
+ *   none of these: neither holds the token nor has it in its care
+ * A hand-over from H (token at hop n) to X, the robot close ahead:
+ *
+ *   H holding -> offering: OFFER(X, n+1) ...     X, not holding: answers each OFFER with ACCEPT(H, n+1); accepted
+ *   H hears X's ACCEPT(H, n+1): token 0, giving: GIVE(X, n+1) ...
+ *                                                X: the GIVE of the offer it accepted: takes the token (token 1,
+ *                                                   hop n+1, a visit); answers every GIVE with TAKEN(H, n+1)
+ *   H hears X's TAKEN(H, n+1): none of the states
+ *
+ * At most one robot holds the token at any instant: H lets go before it sends the first GIVE, and X takes the
+ * token only from a GIVE. Between the two nobody holds it: it is on its way, in H's care. Each message names
+ * its addressee; the other robots that hear it ignore it. An offer names one robot and stays with it until that
+ * robot accepts or OFFER_TIMEOUT_MS pass (robots ahead change as they turn away, detour, overtake). Lost messages:
+ *   OFFER or ACCEPT lost: H offers again; after the timeout it withdraws the offer, still holding the token, and
+ *     offers to whichever robot is close ahead then. An ACCEPT that was not followed by GIVE gave X nothing.
+ *   GIVE or TAKEN lost: H gives again, without a timeout (it cannot tell whether X holds the token, so it may
+ *     neither take it back nor give up); X answers each GIVE with TAKEN and keeps the token it took.
+ *   X hands the token on before H hears TAKEN: X still answers H's GIVE, now a repeat (it no longer matches an
+ *     offer X accepted); and when the token comes back to H, H's own hand-over is over too.
+ */
+static void on_token_msg(uint8_t kind, uint8_t from, uint8_t hop)
+{
+    uint8_t next = (uint8_t)(t.hop + 1u);
+    switch (kind) {
+    case TRACK_MSG_OFFER:
+        if (!robot_state.track.token) {
+            t.accepted_from = from;
+            t.accepted_hop = hop;
+            answer(TRACK_MSG_ACCEPT, from, hop);
+        }
+        break;
+    case TRACK_MSG_ACCEPT:
+        if (robot_state.track.token && from == t.offer_to && hop == next) {
+            robot_state.track.token = 0;
+            t.giving = 1;
+            DEBUG_PRINT(TRACK, 2, "token to %u, hop %u", from, hop);
+        }
+        break;
+    case TRACK_MSG_GIVE:
+        if (from == t.accepted_from && hop == t.accepted_hop) {
+            t.accepted_from = 0;
+            t.hop = hop;
+            t.giving = 0; /* the token came back: a hand-over of ours is over too */
+            t.offer_to = 0;
+            robot_state.track.token = 1;
+            robot_state.track.token_visits++;
+            DEBUG_PRINT(TRACK, 2, "token from %u, hop %u", from, hop);
+        }
+        answer(TRACK_MSG_TAKEN, from, hop);
+        break;
+    default: /* TAKEN */
+        if (t.giving && from == t.offer_to && hop == next) {
+            t.giving = 0;
+            t.offer_to = 0;
+        }
+        break;
     }
 }
 
@@ -381,32 +475,10 @@ static bool on_payload(uint8_t side, const hal_ir_msg_t *m)
         return false;
     if (m->data[1] != settings.identity.robot_id)
         return true;
-    uint8_t hop = m->data[2];
-    switch (kind) {
-    case TRACK_MSG_GREET:
+    if (kind == TRACK_MSG_GREET)
         robot_state.track.met_id = m->sender_id;
-        break;
-    case TRACK_MSG_TOKEN:
-        if (m->sender_id != t.taken_from || hop != t.taken_hop) { /* a new hand-over, not a repeat */
-            t.taken_from = m->sender_id;
-            t.taken_hop = hop;
-            t.hop = hop;
-            t.offer_to = 0;
-            robot_state.track.token = 1;
-            robot_state.track.token_visits++;
-            DEBUG_PRINT(TRACK, 2, "token from %u, hop %u", m->sender_id, hop);
-        }
-        t.ack_pending = 1;
-        break;
-    case TRACK_MSG_TAKEN:
-        if (robot_state.track.token && m->sender_id == t.offer_to && hop == (uint8_t)(t.hop + 1u)) {
-            robot_state.track.token = 0;
-            t.offer_to = 0;
-        }
-        break;
-    default:
-        break;
-    }
+    else
+        on_token_msg(kind, m->sender_id, m->data[2]);
     return true;
 }
 
@@ -454,10 +526,7 @@ static uint8_t on_track(const pb_frame_t *cmd, uint16_t *detail)
 
 void track_init(void)
 {
-    t.active = 0;
-    t.created = 0;
-    t.offer_to = t.taken_from = t.taken_hop = t.ack_pending = 0;
-    t.greet_to = t.greeted[0] = t.greeted[1] = 0;
+    memset(&t, 0, sizeof t);
     k.gen = (uint8_t)(settings_generation - 1u);
     refresh_params();
     robot_state.track.status = PB_TRACK_STATUS_OFF;
@@ -486,6 +555,6 @@ void track_task(void)
 {
     if (t.active)
         step();
-    if (t.ack_pending || t.active)
+    if (t.active || t.reply || t.giving)
         talk();
 }

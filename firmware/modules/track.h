@@ -14,12 +14,9 @@
  * searches for it (status lost): it sweeps 45 degrees either side turning on the spot and backs up 40 mm (unless
  * something is close behind), four rounds at most, then stands still until the line is under its sensor again.
  *
- * IR messages (payloads of proximity's beacons, 3 bytes: kind, addressee id, hop):
- *   TRACK_MSG_GREET  "I see you"                             hop 0
- *   TRACK_MSG_TOKEN  "take the token", repeated every beacon   hop = hand-overs so far + 1
- *   TRACK_MSG_TAKEN  "I have it", in answer to each TOKEN      the hop taken
- * The holder keeps the token (and repeats TOKEN) until it hears TAKEN for that hop from the addressee, so a
- * lost message never loses the token; the addressee takes a hop once (a repeated TOKEN is only answered).
+ * IR messages (payloads of proximity's beacons, 3 bytes: kind, addressee id, hop): GREET ("I see you", hop 0),
+ * and the token's two-phase hand-over OFFER, ACCEPT, GIVE, TAKEN (hop = the token's hand-overs so far + 1), which
+ * lets at most one robot hold the token at any instant and never loses it: see track.c.
  *
  * The host starts, stops and reverses the behaviour with the `track` command (reverse = turn round on the
  * spot and find the line again) and sets the speed in settings.track. It runs in locomotion's track mode: any
@@ -33,8 +30,10 @@
 #include <stdint.h>
 
 #define TRACK_MSG_GREET 0xA1u
-#define TRACK_MSG_TOKEN 0xA2u
-#define TRACK_MSG_TAKEN 0xA3u
+#define TRACK_MSG_OFFER 0xA2u
+#define TRACK_MSG_ACCEPT 0xA3u
+#define TRACK_MSG_GIVE 0xA4u
+#define TRACK_MSG_TAKEN 0xA5u
 #define TRACK_MSG_LEN 3u
 
 /** Call after proximity_init(): registers the `track` command and the payload listener. */

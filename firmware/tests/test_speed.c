@@ -80,10 +80,42 @@ static void distance_is_extrapolated_within_a_pulse(void)
     CHECK(worst < 0.0005, "extrapolation error %.3f mm (a pulse is 0.707 mm)", worst * 1000);
 }
 
+/* A wheel that stopped just past a stripe edge and creeps back over it as it is driven the other way: its first
+ * edge in the new direction is the same edge again, a fraction of a pulse later. That is no speed. */
+static void a_wheel_that_crosses_back_over_its_last_edge_reads_no_speed(void)
+{
+    world_reset(1);
+    pb_wheel_speeds_t back = {-0.10f, -0.10f}, rest = {0.0f, 0.0f}, on = {0.10f, 0.10f};
+    host_send(PB_PKT_WHEEL_SPEEDS, 0, &back, sizeof back);
+    world_run_ms(400);
+    host_send(PB_PKT_WHEEL_SPEEDS, 1, &rest, sizeof rest);
+    world_run_ms(300);
+    CHECK(robot_state.wheels.speed_left_mmps == 0, "at rest: %d mm/s", robot_state.wheels.speed_left_mmps);
+    /* The left wheel still creeps backwards, 0.1 um from the edge behind it. */
+    world.v[0] = -0.0005;
+    world.pos[0] = world.prev_edge[0] + 1e-7;
+    int32_t count = robot_state.encoders.left;
+    world_run_ms(1);
+    CHECK(robot_state.encoders.left == count - 1, "crossed the edge backwards: %d from %d", robot_state.encoders.left, count);
+    double l0 = world.pos[0], r0 = world.pos[1];
+    host_send(PB_PKT_WHEEL_SPEEDS, 2, &on, sizeof on);
+    int fastest = 0;
+    for (int i = 0; i < 60; i++) {
+        world_run_ms(1);
+        if (robot_state.wheels.speed_left_mmps > fastest)
+            fastest = robot_state.wheels.speed_left_mmps;
+    }
+    CHECK(fastest < 130, "the left wheel never read faster than it can have turned: %d mm/s", fastest);
+    world_run_ms(140);
+    double dl = world.pos[0] - l0, dr = world.pos[1] - r0;
+    CHECK(fabs(dl - dr) < 0.002, "both wheels drove on together: left %.1f mm, right %.1f mm", dl * 1000, dr * 1000);
+}
+
 void suite_speed(void)
 {
     RUN(speed_from_one_and_two_periods);
     RUN(measured_speed_is_smooth_over_unequal_stripes_and_times_out);
     RUN(counts_are_signed_by_the_motor_direction);
     RUN(distance_is_extrapolated_within_a_pulse);
+    RUN(a_wheel_that_crosses_back_over_its_last_edge_reads_no_speed);
 }

@@ -23,9 +23,11 @@ import kotlinx.coroutines.flow.channelFlow
 import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.withTimeoutOrNull
 import org.pocketbot.protocol.ColourMode
 import org.pocketbot.protocol.DebugModule
+import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugSource
@@ -100,14 +102,14 @@ class InfoCommand : RobotCommand("info") {
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         for (r in robots) {
-            // The battery comes with the first full state after the handshake.
-            val state = withTimeoutOrNull(FIRST_STATE) { r.state.first { it.power.batteryMv > 0 } } ?: r.state.value
+            // The battery comes with the first full state after the handshake; a robot that sends none shows no battery.
+            val state = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }
             val id = r.identity
             val stats = r.linkStats.value
             out.row(
                 "name" to id.name, "id" to id.robotId, "address" to id.address, "firmware" to id.firmwareVersion,
                 "protocol" to id.protocolVersion, "layout" to "0x" + id.layoutHash.toString(16).uppercase(),
-                "battery_v" to state.power.batteryMv / 1000.0, "frames_in" to stats.framesReceived, "frames_out" to stats.framesSent,
+                "battery_v" to state?.let { it.power.batteryMv / 1000.0 }, "frames_in" to stats.framesReceived, "frames_out" to stats.framesSent,
                 "dropped" to stats.dropped, "reconnects" to stats.reconnects,
             )
         }
@@ -201,9 +203,10 @@ private fun fileOf(dir: File, robot: Robot): File = File(dir, robot.identity.nam
 
 class SettingsExport : RobotCommand("export", 0..1) {
     override fun help(context: Context) = """
-        Writes every setting as JSON to FILE, or to stdout. With --all, writes one file per robot into the directory
-        DIR, named after the robot (DIR/PocketBot-1.json): a robot's settings include its id and name, so robots
-        never share one file.
+        Writes every setting as JSON to FILE, or to stdout.
+
+        With --all, writes one file per robot into the directory DIR, named after the robot (DIR/PocketBot-1.json):
+        a robot's settings include its id and name, so robots never share one file.
 
         Example: pocketbot settings export PocketBot-1 robot1.json
     """.trimIndent()
@@ -230,8 +233,10 @@ class SettingsExport : RobotCommand("export", 0..1) {
 
 class SettingsImport : RobotCommand("import", 1..1) {
     override fun help(context: Context) = """
-        Writes the settings in the JSON FILE (the export format; settings may be left out). Nothing is written when the
-        file does not parse; when the robot refuses a value, the values written before it are put back (exit 4).
+        Writes the settings in the JSON FILE (the export format; settings may be left out).
+
+        Nothing is written when the file does not parse; when the robot refuses a value, the values written before it
+        are put back (exit 4).
         With --all, FILE is a directory of 'settings export --all': each robot gets its own file, and nothing is
         written unless every robot has one.
 
@@ -284,18 +289,19 @@ class StateCommand : RobotCommand("state") {
     }
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
-        fun print(r: Robot) = out.row(linkedMapOf<String, Any?>("robot" to r.identity.name).apply {
-            val s = r.state.value
+        fun print(r: Robot, s: RobotState) = out.row(linkedMapOf<String, Any?>("robot" to r.identity.name).apply {
             for (f in selected) put(f.name, f.of(s))
         })
         if (!watch) {
-            robots.forEach(::print)
+            // The mirror is all zero until the robot's first state: print what the robot reported, not that.
+            val states = robots.map { r -> async { withTimeout(FIRST_STATE) { r.reportedState() } } }.awaitAll()
+            robots.zip(states).forEach { (r, s) -> print(r, s) }
             return
         }
         onEach(robots) { r -> r.reflector.set(SyncMode.FULL, (1000 / rate).milliseconds) }
         out.stream(linkedMapOf("robot" to robots.maxOf { it.identity.name.length }) + selected.associate { it.name to it.width })
         withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
-            val printers = robots.map { r -> launch { r.stateUpdates.collect { print(r) } } }
+            val printers = robots.map { r -> launch { r.stateUpdates.collect { print(r, it.state) } } }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
             throw LinkLostException("lost the link to ${gone.identity.name}: ${gone.connection.value}")
@@ -310,8 +316,9 @@ private suspend fun firstLost(robots: List<Robot>): Robot = channelFlow {
 
 class ConsoleCommand : RobotCommand("console") {
     override fun help(context: Context) = """
-        Prints the robot's debug text (and the SDK's messages about its link) until stopped. --level sets the robot's
-        debug level first (1 errors, 2 info, 3 verbose, 4 trace).
+        Prints the robot's debug text, and the SDK's messages about its link, until stopped.
+
+        --level sets the robot's debug level first (1 errors, 2 info, 3 verbose, 4 trace).
 
         Example: pocketbot console PocketBot-1 --level 3
     """.trimIndent()
@@ -399,8 +406,9 @@ class StopCommand : RobotCommand("stop") {
 
 class FollowCommand : RobotCommand("follow", 1..1) {
     override fun help(context: Context) = """
-        'start' or 'stop' line following; --speed m/s (default: the robot's setting), --colours for colour segments
-        (red slows down, blue speeds up).
+        Starts or stops line following: 'start' or 'stop'.
+
+        --speed m/s (default: the robot's setting), --colours for colour segments (red slows down, blue speeds up).
 
         Example: pocketbot follow PocketBot-1 start --speed 0.15 --colours
     """.trimIndent()

@@ -3,6 +3,7 @@ package org.pocketbot.cli
 import kotlinx.serialization.json.Json
 import kotlinx.serialization.json.jsonObject
 import kotlinx.serialization.json.jsonPrimitive
+import kotlinx.serialization.json.long
 import org.junit.jupiter.api.AfterAll
 import org.junit.jupiter.api.BeforeAll
 import org.junit.jupiter.api.Test
@@ -196,6 +197,10 @@ class CliProcessTest {
         assertEquals(0, once.code, "$once")
         val row = jsonLines(once.out).single()
         assertEquals(listOf("robot", "time.time_ms", "wheels.speed_left_mmps", "wheels.speed_right_mmps", "wheels.pwm_left", "wheels.pwm_right"), row.keys.toList())
+        // What the robot reported, not the all-zero mirror from before its first state.
+        val reportedMs = row.getValue("time.time_ms").jsonPrimitive.long
+        val robotMs = emulator.robot(1).state().time.timeMs
+        assertTrue(reportedMs in 1..robotMs, "reported robot time $reportedMs ms, the robot's own $robotMs ms")
 
         val watched = pocketbot("state", "PocketBot-1", "--watch", "--rate", "20", "--seconds", "1.5", "--fields", "time.time_ms", "--csv")
         val times = watched.out.lines().drop(1).filter { it.isNotBlank() }.map { it.substringAfter(',').toLong() }

@@ -26,9 +26,10 @@ import kotlin.system.exitProcess
  */
 public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
     override fun help(context: Context): String = """
-        Runs emulated PocketBot2 robots (the real firmware as WebAssembly) on TCP ports, until stopped (Ctrl-C, or 'q'
-        on stdin). Only this machine reaches them unless --listen puts them on the network. Stdin commands: p pause,
-        r resume, s single step, t time, q quit.
+        Runs emulated PocketBot2 robots (the real firmware as WebAssembly) on TCP ports, until stopped.
+
+        Ctrl-C or 'q' on stdin stops it. Only this machine reaches the robots unless --listen puts them on the
+        network. Stdin commands: p pause, r resume, s single step, t time, q quit.
 
         Examples: emulator --robots 3 --world round
                   emulator --listen 0.0.0.0      (a phone on the same Wi-Fi drives the robots)

@@ -1,5 +1,6 @@
 package org.pocketbot.sdk
 
+import kotlinx.coroutines.CompletableDeferred
 import kotlinx.coroutines.CoroutineName
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
@@ -84,6 +85,7 @@ public class Robot internal constructor(
     private val job = SupervisorJob()
     private val _state = MutableStateFlow(EMPTY_STATE)
     private val _stateUpdates = MutableSharedFlow<StateUpdate>(extraBufferCapacity = 256, onBufferOverflow = BufferOverflow.DROP_OLDEST)
+    private val firstFullState = CompletableDeferred<Unit>()
 
     /** The robot's debug text and the SDK's warnings about its link. */
     public val debugLog: DebugLog = DebugLog()
@@ -103,7 +105,10 @@ public class Robot internal constructor(
             link.close(cause?.let { RobotClosedException("the scope of robot ${device.name} ended", it) })
         }
         // A long-lived scope must not keep every robot it ever connected reachable.
-        job.invokeOnCompletion { bound?.dispose() }
+        job.invokeOnCompletion {
+            bound?.dispose()
+            firstFullState.completeExceptionally(RobotClosedException("robot ${device.name} closed before it reported a state"))
+        }
     }
 
     private val mirror = SettingsMirror(link, options.settingsCache, debugLog)
@@ -122,9 +127,24 @@ public class Robot internal constructor(
     /**
      * The whole robot state as last reported; `time.timeMs` is the robot time it was measured at. A reduced packet
      * updates encoders, wheel speeds, line position and time and keeps the rest. All zero until the first state
-     * packet.
+     * packet: [reportedState] waits for it.
      */
     public val state: StateFlow<RobotState> = _state.asStateFlow()
+
+    /**
+     * The whole state as the robot reported it: [state]'s value once a full state packet has arrived since the
+     * connect, at once; before that, suspends until the first one arrives (right after [connect] returns it is
+     * usually one sync period away). With [SyncMode.NONE] or [SyncMode.REDUCED] no full state comes: bound the wait
+     * with a timeout. Throws [RobotClosedException] when the robot closes before its first state.
+     *
+     * ```
+     * val volts = robot.reportedState().power.batteryMv / 1000.0
+     * ```
+     */
+    public suspend fun reportedState(): RobotState {
+        firstFullState.await()
+        return _state.value
+    }
 
     /**
      * Every state update, unconflated (a [StateFlow] drops values a slow collector did not see): its kind and the
@@ -221,6 +241,7 @@ public class Robot internal constructor(
         motors.update(state.wheels)
         odometry.update(state.encoders, state.time.timeMs)
         if (kind == StateUpdate.Kind.FULL) {
+            firstFullState.complete(Unit)
             locomotion.update(state.locomotion, state.time.timeMs)
             lineFollower.update(state.lineFollow)
             proximity.update(state.proximity, state.time.timeMs)

@@ -20,8 +20,9 @@ import org.pocketbot.sdk.internal.link.LinkPort
  * holds a token, created by the robot whose id is `settings.track.token_origin_id` at its first start; the holder
  * shows it ([holdsToken], the status LED `token`: the thesis's orange light) and drives
  * `settings.track.token_boost_percent` faster until it has caught up with the robot ahead and handed the token on
- * (an IR handshake that never loses the token), so the token travels round the track. An obstacle on the line is
- * driven round on the right: the robot leaves the line, passes it, finds the line again and lines up with it.
+ * (an IR handshake by which at most one robot holds the token at any instant and it is never lost), so the token
+ * travels round the track. An obstacle on the line is driven round on the right: the robot leaves the line, passes
+ * it, finds the line again and lines up with it.
  *
  * **The link failsafe does not stop it**: the behaviour is the robot's own, not host-driven, so it goes on when the
  * host link is lost (as line following does with `settings.line_follow.autonomous` = 1). [stop], or any other

@@ -118,7 +118,7 @@ public class BluezDiscoverer(
         }
     }.flowOn(Dispatchers.IO)
 
-    private suspend fun connect(): DBusConnection = call("connect to ${busAddress ?: "the system bus"}") {
+    private suspend fun connect(): DBusConnection = call("connect to ${busAddress ?: "the system bus (is D-Bus running, with BlueZ?)"}") {
         val builder = if (busAddress != null) DBusConnectionBuilder.forAddress(busAddress)
         else DBusConnectionBuilder.forSystemBus()
         builder.withShared(false).build()
@@ -128,11 +128,14 @@ public class BluezDiscoverer(
         try {
             block()
         } catch (e: DBusException) {
-            throw TransportLostException("bluetooth $adapter: cannot $what: ${e.message}", e)
+            throw TransportLostException("bluetooth $adapter: cannot $what: ${reason(e)}", e)
         } catch (e: DBusExecutionException) {
-            throw TransportLostException("bluetooth $adapter: cannot $what: ${e.message}", e)
+            throw TransportLostException("bluetooth $adapter: cannot $what: ${reason(e)}", e)
         }
     }
+
+    /** dbus-java appends its cause's message even when there is none ("Failed to connect to bus: null"). */
+    private fun reason(e: Exception): String = e.message?.removeSuffix(": null") ?: e::class.simpleName ?: "unknown error"
 
     override fun toString(): String = "BluezDiscoverer($adapter)"
 

@@ -1,6 +1,13 @@
 package org.pocketbot.sdk.it
 
 import kotlinx.coroutines.delay
+import kotlinx.coroutines.async
+import kotlinx.coroutines.withTimeoutOrNull
+import org.pocketbot.sdk.InMemorySettingsCache
+import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotOptions
+import kotlin.test.assertNull
+import kotlin.time.Duration.Companion.seconds
 import kotlinx.coroutines.flow.filter
 import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.flow.take
@@ -32,6 +39,26 @@ class ConnectAndReflectIntegrationTest {
         assertEquals(emu.handleOf(robot).name, robot.identity.name)
         assertMirrors(robot, emu.handleOf(robot).settingsBytes())
         robot.close()
+    }
+
+    @Test
+    fun reportedStateWaitsForTheFirstFullStateAndFailsWhenTheRobotCloses() = withEmulator { emu ->
+        val silent = RobotOptions(syncMode = SyncMode.NONE, settingsCache = InMemorySettingsCache())
+        val robot = connectAll(emu, silent).single()
+        assertNull(withTimeoutOrNull(1.seconds) { robot.reportedState() }, "no state was sent, so none is reported")
+        assertEquals(0, robot.state.value.power.batteryMv, "the mirror is all zero before the first state")
+
+        robot.reflector.set(SyncMode.FULL, 50.milliseconds)
+        val reported = robot.reportedState()
+        assertTrue(reported.power.batteryMv > 3000, "battery of the reported state: ${reported.power.batteryMv} mV")
+        assertTrue(reported.time.timeMs > 1000, "robot time of the reported state: ${reported.time.timeMs} ms")
+        robot.close()
+
+        val never = connectAll(emu, silent).single()
+        val waiting = async { runCatching { never.reportedState() } }
+        never.close()
+        val failure = waiting.await().exceptionOrNull()
+        assertTrue(failure is RobotClosedException, "waiting on a robot that closes must end with RobotClosedException: $failure")
     }
 
     @Test
