@@ -5,6 +5,7 @@ import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import org.pocketbot.desktop.model.EditStatus
 import org.pocketbot.desktop.model.SampleRing
+import org.pocketbot.desktop.model.compareNatural
 import org.pocketbot.desktop.ui.ColumnSpans
 import org.pocketbot.desktop.ui.decimals
 import org.pocketbot.desktop.ui.describe
@@ -83,6 +84,13 @@ class ModelTest {
         for (v in listOf(0.0, 4.08, 4.075, -2.345, -1.5, 0.15, 12.3456, 999.999, 1e6 + 0.125)) {
             for (places in 0..3) assertEquals("%.${places}f".format(java.util.Locale.ROOT, v), decimals(v, places), "$v, $places places")
         }
+    }
+
+    @Test
+    fun robotsAreListedByNameWithNumbersInOrder() {
+        val names = listOf("PocketBot-10", "PocketBot-2", "alpha", "PocketBot-1", "PocketBot-02a", "PocketBot-2")
+        assertEquals(listOf("PocketBot-1", "PocketBot-2", "PocketBot-2", "PocketBot-02a", "PocketBot-10", "alpha"),
+            names.sortedWith(::compareNatural))
     }
 
     @Test
