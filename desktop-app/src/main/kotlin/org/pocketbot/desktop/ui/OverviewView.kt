@@ -97,7 +97,7 @@ private fun TrackCell(robot: RobotModel, modifier: Modifier, stale: Boolean) {
     val holds = track.token != 0
     Row(modifier, verticalAlignment = Alignment.CenterVertically) {
         if (holds) TokenLight(true, Modifier.padding(end = 6.dp).testTag("overview-token-${robot.name}"))
-        val visits = if (holds || track.tokenVisits > 0) " · ${track.tokenVisits} visits" else ""
+        val visits = if (holds || track.tokenVisits > 0) " · " + visitsText(track.tokenVisits) else ""
         Text(track.status.name.lowercase().replace('_', ' ') + visits, Modifier.testTag("overview-track-${robot.name}").stale(stale),
             style = MaterialTheme.typography.bodyMedium, color = valueColour(stale), maxLines = 1, overflow = TextOverflow.Ellipsis)
     }

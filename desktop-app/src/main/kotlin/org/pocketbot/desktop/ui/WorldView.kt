@@ -37,6 +37,7 @@ import androidx.compose.ui.text.drawText
 import androidx.compose.ui.text.rememberTextMeasurer
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
+import org.pocketbot.desktop.model.TrueRobot
 import org.pocketbot.desktop.model.WorldSnapshot
 import org.pocketbot.emulator.physics.RobotParams
 import org.pocketbot.emulator.world.Tape
@@ -113,12 +114,12 @@ object RobotShape {
     val lengthM = params.lengthM
     val widthM = params.widthM
     val body = listOf(lengthM / 2 to widthM / 2, -lengthM / 2 to widthM / 2, -lengthM / 2 to -widthM / 2, lengthM / 2 to -widthM / 2)
-    val frontMark = listOf(lengthM / 2 - 0.002 to 0.0, 0.008 to 0.009, 0.008 to -0.009)
+    val frontMark = listOf(lengthM / 2 - 0.002 to 0.0, 0.011 to 0.008, 0.011 to -0.008)
     const val LIGHT_RADIUS_M = 0.005
 
     /** A point well inside the front mark, and one as far behind the centre: only the first is [frontMarkColour]. */
-    val insideFrontMark = 0.0135 to 0.0
-    val insideRear = -0.0135 to 0.0
+    val insideFrontMark = 0.015 to 0.0
+    val insideRear = -0.015 to 0.0
 
     /** The world coordinates (x, y) of the body point ([forward], [left]) of a robot at [pose]. */
     fun at(pose: Pose, forward: Double, left: Double): Pair<Double, Double> {
@@ -130,7 +131,7 @@ object RobotShape {
 
 /**
  * A robot at [pose]: its body filled in [colour] with a white triangle on its front (the true pose) or, when not
- * [filled], the same shape outlined (the odometry pose); [token] lights its orange light.
+ * [filled], the same shape outlined (the odometry pose); [token] lights its orange light, with a glow round it.
  */
 fun DrawScope.drawRobot(pose: Pose, frame: WorldFrame, colour: Color, filled: Boolean, token: Boolean = false) {
     fun path(points: List<Pair<Double, Double>>) = Path().apply {
@@ -140,17 +141,18 @@ fun DrawScope.drawRobot(pose: Pose, frame: WorldFrame, colour: Color, filled: Bo
         }
         close()
     }
-    if (filled) {
-        drawPath(path(RobotShape.body), colour)
-        drawPath(path(RobotShape.frontMark), frontMarkColour)
-    } else {
+    if (!filled) {
         drawPath(path(RobotShape.body), colour, style = Stroke(2f))
         drawPath(path(RobotShape.frontMark), colour, style = Stroke(1.5f))
+        return
     }
+    drawPath(path(RobotShape.body), colour)
+    val c = frame.at(pose.xM, pose.yM)
+    val r = frame.length(RobotShape.LIGHT_RADIUS_M).coerceAtLeast(4f)
+    if (token) drawCircle(tokenColour.copy(alpha = 0.45f), r * 2.2f, c)
+    drawPath(path(RobotShape.frontMark), frontMarkColour)
     if (token) {
-        val c = frame.at(pose.xM, pose.yM)
-        val r = frame.length(RobotShape.LIGHT_RADIUS_M).coerceAtLeast(4f)
-        drawCircle(Color.White, r + 2f, c)
+        drawCircle(Color.White, r + 1.5f, c)
         drawCircle(tokenColour, r, c)
     }
 }
@@ -189,7 +191,7 @@ fun WorldView(model: PanelModel) {
             Button(onClick = { model.restartEmulator(worldName, count.trim().toIntOrNull() ?: -1) }, Modifier.testTag("emu-restart")) {
                 Text("Restart with $worldName".let { if (it.length > 40) "Restart with world file" else it })
             }
-            Text("filled: true pose · outline: odometry · white triangle: front · orange light: holds the track token",
+            Text("filled: true pose · outline: odometry where it differs · white triangle: front · orange light: track token",
                 style = MaterialTheme.typography.bodySmall)
         }
         NetworkRow(model, snapshot)
@@ -203,16 +205,19 @@ fun WorldView(model: PanelModel) {
             val w = snapshot.world
             val frame = WorldFrame(0.0, 0.0, w.widthM, w.heightM, size)
             drawWorld(w, frame, snapshot.boxes)
-            for (t in snapshot.robots) {
-                val index = robots.indexOfFirst { it.address == t.address }
-                val colour = robotColours[(if (index >= 0) index else t.id) % robotColours.size]
-                drawRobot(t.pose, frame, colour, filled = true, token = t.holdsToken)
-                if (index >= 0) drawRobot(robots[index].robot.odometry.pose.value, frame, colour, filled = false)
-                // The name beside the body, clear of it whichever way the robot faces.
-                val label = if (index >= 0) robots[index].name else "robot ${t.id}"
+            val drawn = snapshot.robots.map { t -> t to robots.indexOfFirst { it.address == t.address } }
+            fun colourOf(t: TrueRobot, index: Int) = robotColours[(if (index >= 0) index else t.id) % robotColours.size]
+            // Odometry underneath: where it agrees with the truth the body covers it, where it drifts it shows.
+            for ((t, index) in drawn) if (index >= 0) drawRobot(robots[index].robot.odometry.pose.value, frame, colourOf(t, index), filled = false)
+            for ((t, index) in drawn) drawRobot(t.pose, frame, colourOf(t, index), filled = true, token = t.holdsToken)
+            // Names last, on a pale ground (readable over tape), beside each body whichever way it faces.
+            for ((t, index) in drawn) {
+                val label = measurer.measure(if (index >= 0) robots[index].name else "robot ${t.id}", labelStyle)
                 val c = frame.at(t.pose.xM, t.pose.yM)
                 val clear = frame.length(RobotShape.lengthM / 2) + 4f
-                drawText(measurer, label, Offset(c.x + clear, c.y - clear - 10f), labelStyle)
+                val at = Offset(c.x + clear, c.y - clear - label.size.height)
+                drawRect(floorColour.copy(alpha = 0.8f), at, Size(label.size.width.toFloat(), label.size.height.toFloat()))
+                drawText(label, topLeft = at)
             }
         }
     }
