@@ -55,35 +55,47 @@ fun OverviewView(model: PanelModel) {
 
 @Composable
 private fun OverviewRow(robot: RobotModel, selected: Boolean, onClick: () -> Unit) {
-    val s by robot.robot.state.collectAtHumanRate()
-    val connection by robot.robot.connection.collectAsState()
-    val stats by robot.robot.linkStats.collectAtHumanRate()
     val freshness by robot.freshness.collectAsState()
     // Its own layer, and a background only when selected (the surface shows through otherwise): its values change a
     // few times a second, and then this row alone is drawn again.
     val bg = if (selected) MaterialTheme.colorScheme.primaryContainer else Color.Transparent
     Row(Modifier.width(tableWidth).graphicsLayer().background(bg).clickable(onClick = onClick).padding(vertical = 6.dp).testTag("overview-${robot.name}"),
         verticalAlignment = Alignment.CenterVertically) {
-        val line = s.line
-        val cells = listOf(
-            robot.name,
-            decimals(s.power.batteryMv / 1000.0, 2) + " V",
-            s.locomotion.mode.name.lowercase(),
-            decimals((s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0, 2) + " m/s",
-            if (line.flags and LineFlags.SEEN != 0) "${line.position} ‰" else "no line",
-        )
-        // Battery and mode come with full states only; speed and line with reduced ones too.
-        val stale = listOf(false, freshness != Freshness.ALL, freshness != Freshness.ALL, freshness == Freshness.NONE, freshness == Freshness.NONE)
-        cells.forEachIndexed { i, text ->
-            Text(text, Modifier.width(columns[i].second.dp).stale(stale[i]), style = MaterialTheme.typography.bodyMedium, color = valueColour(stale[i]),
-                maxLines = 1, overflow = TextOverflow.Ellipsis)
-        }
-        TrackCell(robot, Modifier.width(columns[cells.size].second.dp), stale = freshness != Freshness.ALL)
-        Row(Modifier.width(columns.last().second.dp), verticalAlignment = Alignment.CenterVertically) {
-            Spacer(Modifier.size(8.dp).background(connectionColour(connection), CircleShape))
-            Text(" ${describe(connection)} · ${stats.framesReceived} frames · ${stats.reconnects} reconnects", style = MaterialTheme.typography.bodySmall,
-                maxLines = 1, overflow = TextOverflow.Ellipsis)
-        }
+        StateCells(robot, freshness)
+        TrackCell(robot, Modifier.width(columns[5].second.dp), stale = freshness != Freshness.ALL)
+        LinkCell(robot, Modifier.width(columns[6].second.dp))
+    }
+}
+
+/** The cells from the robot's state: composed again as the state changes (a few times a second), apart from the row. */
+@Composable
+private fun StateCells(robot: RobotModel, freshness: Freshness) {
+    val s by robot.robot.state.collectAtHumanRate()
+    val line = s.line
+    val cells = listOf(
+        robot.name,
+        decimals(s.power.batteryMv / 1000.0, 2) + " V",
+        s.locomotion.mode.name.lowercase(),
+        decimals((s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0, 2) + " m/s",
+        if (line.flags and LineFlags.SEEN != 0) "${line.position} ‰" else "no line",
+    )
+    // Battery and mode come with full states only; speed and line with reduced ones too.
+    val stale = listOf(false, freshness != Freshness.ALL, freshness != Freshness.ALL, freshness == Freshness.NONE, freshness == Freshness.NONE)
+    cells.forEachIndexed { i, text ->
+        Text(text, Modifier.width(columns[i].second.dp).stale(stale[i]), style = MaterialTheme.typography.bodyMedium, color = valueColour(stale[i]),
+            maxLines = 1, overflow = TextOverflow.Ellipsis)
+    }
+}
+
+/** The link's state and counters. */
+@Composable
+private fun LinkCell(robot: RobotModel, modifier: Modifier) {
+    val connection by robot.robot.connection.collectAsState()
+    val stats by robot.robot.linkStats.collectAtHumanRate()
+    Row(modifier, verticalAlignment = Alignment.CenterVertically) {
+        Spacer(Modifier.size(8.dp).background(connectionColour(connection), CircleShape))
+        Text(" ${describe(connection)} · ${stats.framesReceived} frames · ${stats.reconnects} reconnects", style = MaterialTheme.typography.bodySmall,
+            maxLines = 1, overflow = TextOverflow.Ellipsis)
     }
 }
 
