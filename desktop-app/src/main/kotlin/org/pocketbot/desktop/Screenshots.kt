@@ -18,8 +18,8 @@ import javax.imageio.ImageIO
 
 /**
  * `make screenshots`: drives the real panel (under Xvfb) through its main views with the embedded fleet running and
- * writes a PNG of the window for each to [dir], the last one on the track world with the track behaviour running,
- * then calls [done].
+ * writes a PNG of the window for each to [dir], the overview, the world and the track behaviour's card on the track
+ * world with the behaviour running (thesis A.3), then calls [done].
  */
 @Composable
 fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<View>, dir: File, done: () -> Unit) {
@@ -35,8 +35,6 @@ fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<Vie
             ImageIO.write(image, "png", File(dir, "$name.png"))
             println("screenshot ${File(dir, "$name.png")}")
         }
-        shoot(View.OVERVIEW, "overview")
-        shoot(View.WORLD, "world")
         shoot(View.SENSORS, "sensors")
         shoot(View.SETTINGS, "settings")
         shoot(View.TRAJECTORY, "trajectory")
@@ -59,12 +57,17 @@ fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<Vie
         tuned.movements.first { it.size == 3 && it.all { m -> m.result != null } }
         tuned.enqueue(Movement.Straight(0.3, 0.1))
         shoot(View.COMMANDS, "commands")
-        // Track (thesis A.3): three robots on the track world running the behaviour, the token holder's Commands view.
+        // Track (thesis A.3): three robots on the track world running the behaviour: the overview with its track
+        // column, the world with the token holder's orange light, and the token holder's Commands view.
         tuned.movements.first { it.last().result != null } // ended before its robot goes with the old world
         model.restartEmulator("track", 3)
         val onTrack = model.robots.first { it.size == 3 && it.none { r -> r in robots } }
+        onTrack.forEach { r -> r.emulated?.let { r.robot.odometry.reset(it.truePose) } }
         model.everyRobot { it.startTrack() }
         delay(8000) // the robots get going and meet
+        model.select(onTrack.firstOrNull { it.robot.track.holdsToken } ?: onTrack.first())
+        shoot(View.OVERVIEW, "overview")
+        shoot(View.WORLD, "world")
         model.select(onTrack.firstOrNull { it.robot.track.holdsToken } ?: onTrack.first())
         shoot(View.COMMANDS, "track")
         done()

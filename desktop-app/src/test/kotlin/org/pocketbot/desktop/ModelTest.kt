@@ -5,6 +5,9 @@ import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import org.pocketbot.desktop.model.EditStatus
 import org.pocketbot.desktop.model.SampleRing
+import org.pocketbot.desktop.model.compareNatural
+import org.pocketbot.desktop.ui.ColumnSpans
+import org.pocketbot.desktop.ui.decimals
 import org.pocketbot.desktop.ui.describe
 import org.pocketbot.desktop.ui.ticks
 import org.pocketbot.sdk.ConnectionState
@@ -44,6 +47,50 @@ class ModelTest {
         assertEquals(listOf(0.0, 0.05, 0.1, 0.15, 0.2), ticks(0.0, 0.2).map { Math.round(it * 100) / 100.0 })
         assertEquals(listOf(-1000.0, -500.0, 0.0, 500.0, 1000.0), ticks(-1000.0, 1000.0))
         assertEquals(emptyList(), ticks(1.0, 1.0))
+    }
+
+    @Test
+    fun chartColumnsCoverEverySampleAndTheLineBetweenThemButNothingElse() {
+        val spans = ColumnSpans(10)
+        // Four samples per column, a spike among them, then a gap of three columns bridged by one segment.
+        val x = floatArrayOf(0.1f, 0.3f, 0.5f, 0.7f, 1.1f, 1.3f, 1.5f, 1.7f, 5.5f)
+        val y = floatArrayOf(50f, 51f, 50f, 50f, 50f, 90f, 50f, 50f, 10f)
+        spans.trace(x, y)
+        for (i in x.indices) {
+            val c = x[i].toInt()
+            assertTrue(y[i] in spans.lo[c]..spans.hi[c], "sample $i (y ${y[i]}) outside column $c: ${spans.lo[c]}..${spans.hi[c]}")
+        }
+        assertEquals(50f, spans.lo[0]); assertEquals(51f, spans.hi[0])
+        assertEquals(90f, spans.hi[1], "the one-sample spike is kept")
+        // From (1.7, 50) to (5.5, 10): 40 px down over 3.8 columns, each column gets its own part of the segment.
+        for (c in 2..4) {
+            val top = 50f - 40f / 3.8f * (c + 1 - 1.7f)
+            val bottom = 50f - 40f / 3.8f * (c - 1.7f)
+            assertEquals(top, spans.lo[c], 1e-3f, "column $c")
+            assertEquals(bottom, spans.hi[c], 1e-3f, "column $c")
+        }
+        assertTrue((6..9).all { spans.lo[it] > spans.hi[it] }, "nothing drawn past the last sample")
+        // Drawn as two 1 px lines per covered column, 1 px beyond the span; a dashed series leaves every other run out.
+        assertEquals(6 * 2 * 4, spans.lines(0f).size)
+        assertEquals(listOf(0.5f, 49f, 0.5f, 52f, 1.5f, 49f, 1.5f, 52f), spans.lines(0f).take(8))
+        assertEquals(listOf(0f, 1f, 4f, 5f), spans.lines(0f, dash = 2).toList().chunked(8).map { it[0] - 0.5f })
+        // A non-finite sample breaks the line: the columns between its neighbours stay empty.
+        spans.trace(floatArrayOf(0.5f, 4.5f, 8.5f), floatArrayOf(10f, Float.NaN, 20f))
+        assertTrue((1..7).all { spans.lo[it] > spans.hi[it] })
+    }
+
+    @Test
+    fun numbersForPeopleHaveTheirDecimalsAsStringFormatWritesThem() {
+        for (v in listOf(0.0, 4.08, 4.075, -2.345, -1.5, 0.15, 12.3456, 999.999, 1e6 + 0.125)) {
+            for (places in 0..3) assertEquals("%.${places}f".format(java.util.Locale.ROOT, v), decimals(v, places), "$v, $places places")
+        }
+    }
+
+    @Test
+    fun robotsAreListedByNameWithNumbersInOrder() {
+        val names = listOf("PocketBot-10", "PocketBot-2", "alpha", "PocketBot-1", "PocketBot-02a", "PocketBot-2")
+        assertEquals(listOf("PocketBot-1", "PocketBot-2", "PocketBot-2", "PocketBot-02a", "PocketBot-10", "alpha"),
+            names.sortedWith(::compareNatural))
     }
 
     @Test

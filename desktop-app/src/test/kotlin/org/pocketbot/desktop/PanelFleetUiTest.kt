@@ -42,6 +42,16 @@ class PanelFleetUiTest {
             val tags = (1..3).flatMap { listOf("overview-PocketBot-$it", "robot-PocketBot-$it") }
             await("every robot in the overview and the sidebar", { tags.filter { exists(it) } }) { tags.all { exists(it) } }
             val robots = f.panel.robots.value
+            // Whatever order they connected in, every view lists them by name.
+            val names = (1..3).map { "PocketBot-$it" }
+            assertEquals(names, robots.map { it.name })
+            for (prefix in listOf("overview-", "robot-")) {
+                val tops = names.map { onNodeWithTag(prefix + it).fetchSemanticsNode().positionInRoot.y }
+                assertEquals(tops.sorted(), tops, "$prefix rows top to bottom by name")
+            }
+            // This window is narrower than the overview's table: it scrolls sideways, and each row stays one line.
+            val height = onNodeWithTag("overview-PocketBot-1").fetchSemanticsNode().size.height
+            assertTrue(height < 60, "an overview row $height px high")
 
             onNodeWithTag("disconnect-PocketBot-2").performClick()
             waitUntil(timeoutMillis = guard) { !exists("robot-PocketBot-2") && exists("tick-emulator:2") }

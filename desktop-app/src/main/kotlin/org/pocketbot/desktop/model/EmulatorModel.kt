@@ -16,6 +16,7 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.emulator.transport.ListenAddress
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
+import org.pocketbot.protocol.LedFlags
 import org.pocketbot.sdk.Pose
 import org.pocketbot.sdk.Trajectory
 import org.pocketbot.sdk.transport.Discoverer
@@ -28,10 +29,14 @@ import java.net.InetAddress
 import java.net.InetSocketAddress
 
 /**
- * One emulated robot as the world view draws it: its true pose, the path it really took, and the host that drives it
- * over the network ([drivenFrom], an IP address), if one does.
+ * One emulated robot as the world view draws it: its true pose, the path it really took, its status LEDs ([led], bits
+ * of [org.pocketbot.protocol.LedFlags]: the track token's orange light among them), and the host that drives it over
+ * the network ([drivenFrom], an IP address), if one does.
  */
-class TrueRobot(val id: Int, val address: String, val pose: Pose, val path: Trajectory, val drivenFrom: String? = null)
+class TrueRobot(val id: Int, val address: String, val pose: Pose, val path: Trajectory, val led: Int = 0, val drivenFrom: String? = null) {
+    /** The robot holds the track token (thesis A.3): its orange light is on. */
+    val holdsToken: Boolean get() = led and LedFlags.TOKEN != 0
+}
 
 /**
  * The embedded emulator served on the network: its robots and control port listen on [listen], the control port at
@@ -197,7 +202,7 @@ class EmulatorModel(
             val path = synchronized(paths) { paths.getOrPut(h.id) { Trajectory() } }
             val timeMs = e.time.inWholeMilliseconds
             path.add(timeMs, pose)
-            TrueRobot(h.id, h.address, pose, path, h.tcpClient?.address?.hostAddress)
+            TrueRobot(h.id, h.address, pose, path, h.led, h.tcpClient?.address?.hostAddress)
         }
         return WorldSnapshot(e.world, e.time.inWholeMilliseconds, robots, e.boxes())
     }

@@ -58,10 +58,10 @@ class PanelModel(
     private var noticeIds = 0L
     private var scanJob: Job? = null
 
-    /** Every robot found by the last scans, one entry per address. */
+    /** Every robot found by the last scans, one entry per address, by name as [robots]. */
     val found: StateFlow<List<FoundDevice>> = _found.asStateFlow()
 
-    /** The connected robots, in the order they were connected. */
+    /** The connected robots by name (numbers in names by value: PocketBot-2 before PocketBot-10), then id and address. */
     val robots: StateFlow<List<RobotModel>> = _robots.asStateFlow()
 
     /** The robot the detail views show. */
@@ -110,7 +110,7 @@ class PanelModel(
         }
     }
 
-    private fun add(d: FoundDevice) = _found.update { list -> list.filterNot { it.address == d.address } + d }
+    private fun add(d: FoundDevice) = _found.update { list -> (list.filterNot { it.address == d.address } + d).sortedWith(foundByName) }
 
     /** Connects [devices] at once; each robot joins [robots] when its handshake is done. */
     fun connect(devices: List<FoundDevice>) {
@@ -122,7 +122,7 @@ class PanelModel(
                 try {
                     val robot = d.device.connect(scope, options)
                     val model = RobotModel(robot, scope, emulator?.handleFor(robot.identity.address), ::notify)
-                    _robots.update { it + model }
+                    _robots.update { (it + model).sortedWith(byName) }
                     if (_selected.value == null) _selected.value = model
                 } catch (e: CancellationException) {
                     throw e
@@ -245,5 +245,33 @@ class PanelModel(
     private companion object {
         const val MAX_NOTICES = 5
         const val EMBEDDED = "embedded emulator"
+
+        /** Every view lists robots in this one order, whatever order they connected in. */
+        val byName: Comparator<RobotModel> = Comparator<RobotModel> { a, b -> compareNatural(a.name, b.name) }
+            .thenBy { it.robot.identity.robotId }.thenBy { it.address }
+        val foundByName: Comparator<FoundDevice> = Comparator<FoundDevice> { a, b -> compareNatural(a.device.name, b.device.name) }
+            .thenBy { it.address }
     }
+}
+
+/** Compares [a] and [b] as people sort names: runs of digits by their value, the rest by character ("PocketBot-2" < "PocketBot-10"). */
+fun compareNatural(a: String, b: String): Int {
+    var i = 0
+    var j = 0
+    while (i < a.length && j < b.length) {
+        if (a[i].isDigit() && b[j].isDigit()) {
+            val ei = (i until a.length).firstOrNull { !a[it].isDigit() } ?: a.length
+            val ej = (j until b.length).firstOrNull { !b[it].isDigit() } ?: b.length
+            val na = a.substring(i, ei).trimStart('0')
+            val nb = b.substring(j, ej).trimStart('0')
+            val c = if (na.length != nb.length) na.length - nb.length else na.compareTo(nb)
+            if (c != 0) return c
+            i = ei; j = ej
+        } else {
+            val c = a[i].compareTo(b[j])
+            if (c != 0) return c
+            i++; j++
+        }
+    }
+    return (a.length - i) - (b.length - j)
 }

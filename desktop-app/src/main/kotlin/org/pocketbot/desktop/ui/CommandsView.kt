@@ -170,6 +170,9 @@ private fun LineFollowing(robot: RobotModel) {
 /** The thesis's orange light: the token LED of a robot on the track. */
 val tokenColour = Color(0xFFFF8F00)
 
+/** "1 visit", "3 token visits": how often the track token came to a robot. */
+fun visitsText(n: Int, of: String = ""): String = "$n ${of}visit" + if (n == 1) "" else "s"
+
 /**
  * Thesis A.3, multiple robots on a track: the behaviour runs in each robot's firmware; the panel starts, reverses and
  * stops it on this robot or on all of them, sets its speed, and shows what this robot reports.
@@ -210,7 +213,7 @@ private fun TrackBehaviour(robot: RobotModel, model: PanelModel) {
             TokenLight(track.token != 0, Modifier.testTag(if (track.token != 0) "track-token" else "track-no-token"))
             val met = if (track.metId == 0) "nobody yet" else robots.firstOrNull { it.robot.identity.robotId == track.metId }?.name ?: "robot ${track.metId}"
             Text("${track.status.name.lowercase().replace('_', ' ')} · " + (if (track.token != 0) "holds the token" else "no token") +
-                " · ${track.tokenVisits} token visits · met $met", Modifier.testTag("track-status").stale(stale),
+                " · ${visitsText(track.tokenVisits, "token ")} · met $met", Modifier.testTag("track-status").stale(stale),
                 style = MaterialTheme.typography.bodyMedium, color = valueColour(stale))
         }
     }

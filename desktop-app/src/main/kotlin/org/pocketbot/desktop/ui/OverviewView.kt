@@ -6,10 +6,10 @@ import androidx.compose.foundation.layout.Arrangement
 import androidx.compose.foundation.layout.Column
 import androidx.compose.foundation.layout.Row
 import androidx.compose.foundation.layout.Spacer
-import androidx.compose.foundation.layout.fillMaxWidth
 import androidx.compose.foundation.layout.padding
 import androidx.compose.foundation.layout.size
 import androidx.compose.foundation.layout.width
+import androidx.compose.foundation.horizontalScroll
 import androidx.compose.foundation.rememberScrollState
 import androidx.compose.foundation.shape.CircleShape
 import androidx.compose.foundation.verticalScroll
@@ -21,7 +21,10 @@ import androidx.compose.runtime.collectAsState
 import androidx.compose.runtime.getValue
 import androidx.compose.ui.Alignment
 import androidx.compose.ui.Modifier
+import androidx.compose.ui.graphics.Color
+import androidx.compose.ui.graphics.graphicsLayer
 import androidx.compose.ui.platform.testTag
+import androidx.compose.ui.text.style.TextOverflow
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.Freshness
@@ -29,52 +32,70 @@ import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.protocol.LineFlags
 
 private val columns = listOf("robot" to 160, "battery" to 80, "mode" to 110, "speed" to 110, "line" to 130, "track" to 190, "link" to 280)
+private val tableWidth = columns.sumOf { it.second }.dp
 
 /** Every connected robot side by side, one row each: for fleets. A click selects a robot. */
 @Composable
 fun OverviewView(model: PanelModel) {
     val robots by model.robots.collectAsState()
     val selected by model.selected.collectAsState()
-    Column(Modifier.verticalScroll(rememberScrollState())) {
+    // A window narrower than the table scrolls it sideways: its rows stay one line each.
+    Column(Modifier.verticalScroll(rememberScrollState()).horizontalScroll(rememberScrollState())) {
         Text("Fleet overview: ${robots.size} robot(s)", style = MaterialTheme.typography.titleLarge)
         Row(Modifier.padding(vertical = 8.dp)) {
             for ((title, width) in columns) Text(title, Modifier.width(width.dp), style = MaterialTheme.typography.labelLarge)
         }
-        HorizontalDivider()
+        HorizontalDivider(Modifier.width(tableWidth))
         for (r in robots) {
             OverviewRow(r, r == selected) { model.select(r) }
-            HorizontalDivider()
+            HorizontalDivider(Modifier.width(tableWidth))
         }
     }
 }
 
 @Composable
 private fun OverviewRow(robot: RobotModel, selected: Boolean, onClick: () -> Unit) {
-    val s by robot.robot.state.collectAsState()
-    val connection by robot.robot.connection.collectAsState()
-    val stats by robot.robot.linkStats.collectAsState()
     val freshness by robot.freshness.collectAsState()
-    val bg = if (selected) MaterialTheme.colorScheme.primaryContainer else MaterialTheme.colorScheme.surface
-    Row(Modifier.fillMaxWidth().background(bg).clickable(onClick = onClick).padding(vertical = 6.dp).testTag("overview-${robot.name}"),
+    // Its own layer, and a background only when selected (the surface shows through otherwise): its values change a
+    // few times a second, and then this row alone is drawn again.
+    val bg = if (selected) MaterialTheme.colorScheme.primaryContainer else Color.Transparent
+    Row(Modifier.width(tableWidth).graphicsLayer().background(bg).clickable(onClick = onClick).padding(vertical = 6.dp).testTag("overview-${robot.name}"),
         verticalAlignment = Alignment.CenterVertically) {
-        val line = s.line
-        val cells = listOf(
-            robot.name,
-            "%.2f V".format(s.power.batteryMv / 1000.0),
-            s.locomotion.mode.name.lowercase(),
-            "%.2f m/s".format((s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0),
-            if (line.flags and LineFlags.SEEN != 0) "${line.position} ‰" else "no line",
-        )
-        // Battery and mode come with full states only; speed and line with reduced ones too.
-        val stale = listOf(false, freshness != Freshness.ALL, freshness != Freshness.ALL, freshness == Freshness.NONE, freshness == Freshness.NONE)
-        cells.forEachIndexed { i, text ->
-            Text(text, Modifier.width(columns[i].second.dp).stale(stale[i]), style = MaterialTheme.typography.bodyMedium, color = valueColour(stale[i]))
-        }
-        TrackCell(robot, Modifier.width(columns[cells.size].second.dp), stale = freshness != Freshness.ALL)
-        Row(Modifier.width(columns.last().second.dp), verticalAlignment = Alignment.CenterVertically) {
-            Spacer(Modifier.size(8.dp).background(connectionColour(connection), CircleShape))
-            Text(" ${describe(connection)} · ${stats.framesReceived} frames · ${stats.reconnects} reconnects", style = MaterialTheme.typography.bodySmall)
-        }
+        StateCells(robot, freshness)
+        TrackCell(robot, Modifier.width(columns[5].second.dp), stale = freshness != Freshness.ALL)
+        LinkCell(robot, Modifier.width(columns[6].second.dp))
+    }
+}
+
+/** The cells from the robot's state: composed again as the state changes (a few times a second), apart from the row. */
+@Composable
+private fun StateCells(robot: RobotModel, freshness: Freshness) {
+    val s by robot.robot.state.collectAtHumanRate()
+    val line = s.line
+    val cells = listOf(
+        robot.name,
+        decimals(s.power.batteryMv / 1000.0, 2) + " V",
+        s.locomotion.mode.name.lowercase(),
+        decimals((s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0, 2) + " m/s",
+        if (line.flags and LineFlags.SEEN != 0) "${line.position} ‰" else "no line",
+    )
+    // Battery and mode come with full states only; speed and line with reduced ones too.
+    val stale = listOf(false, freshness != Freshness.ALL, freshness != Freshness.ALL, freshness == Freshness.NONE, freshness == Freshness.NONE)
+    cells.forEachIndexed { i, text ->
+        Text(text, Modifier.width(columns[i].second.dp).stale(stale[i]), style = MaterialTheme.typography.bodyMedium, color = valueColour(stale[i]),
+            maxLines = 1, overflow = TextOverflow.Ellipsis)
+    }
+}
+
+/** The link's state and counters. */
+@Composable
+private fun LinkCell(robot: RobotModel, modifier: Modifier) {
+    val connection by robot.robot.connection.collectAsState()
+    val stats by robot.robot.linkStats.collectAtHumanRate()
+    Row(modifier, verticalAlignment = Alignment.CenterVertically) {
+        Spacer(Modifier.size(8.dp).background(connectionColour(connection), CircleShape))
+        Text(" ${describe(connection)} · ${stats.framesReceived} frames · ${stats.reconnects} reconnects", style = MaterialTheme.typography.bodySmall,
+            maxLines = 1, overflow = TextOverflow.Ellipsis)
     }
 }
 
@@ -84,11 +105,12 @@ private fun OverviewRow(robot: RobotModel, selected: Boolean, onClick: () -> Uni
  */
 @Composable
 private fun TrackCell(robot: RobotModel, modifier: Modifier, stale: Boolean) {
-    val track by robot.robot.track.state.collectAsState()
+    val track by robot.robot.track.state.collectAtHumanRate()
     val holds = track.token != 0
     Row(modifier, verticalAlignment = Alignment.CenterVertically) {
         if (holds) TokenLight(true, Modifier.padding(end = 6.dp).testTag("overview-token-${robot.name}"))
-        val visits = if (holds || track.tokenVisits > 0) " · ${track.tokenVisits} visits" else ""
-        Text(track.status.name.lowercase().replace('_', ' ') + visits, Modifier.testTag("overview-track-${robot.name}").stale(stale), style = MaterialTheme.typography.bodyMedium, color = valueColour(stale))
+        val visits = if (holds || track.tokenVisits > 0) " · " + visitsText(track.tokenVisits) else ""
+        Text(track.status.name.lowercase().replace('_', ' ') + visits, Modifier.testTag("overview-track-${robot.name}").stale(stale),
+            style = MaterialTheme.typography.bodyMedium, color = valueColour(stale), maxLines = 1, overflow = TextOverflow.Ellipsis)
     }
 }

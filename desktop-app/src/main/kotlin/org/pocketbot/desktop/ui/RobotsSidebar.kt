@@ -31,6 +31,7 @@ import androidx.compose.runtime.setValue
 import androidx.compose.ui.Alignment
 import androidx.compose.ui.Modifier
 import androidx.compose.ui.graphics.Color
+import androidx.compose.ui.graphics.graphicsLayer
 import androidx.compose.ui.platform.testTag
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
@@ -94,9 +95,9 @@ fun RobotsSidebar(model: PanelModel, modifier: Modifier = Modifier) {
 @Composable
 private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () -> Unit, onDisconnect: () -> Unit) {
     val connection by robot.robot.connection.collectAsState()
-    val stats by robot.robot.linkStats.collectAsState()
     val background = if (selected) MaterialTheme.colorScheme.primaryContainer else Color.Transparent
-    Column(Modifier.fillMaxWidth().background(background, MaterialTheme.shapes.small).clickable(onClick = onSelect)
+    // Its own layer: its link counters change a few times a second, and the rest of the list need not be drawn again.
+    Column(Modifier.fillMaxWidth().graphicsLayer().background(background, MaterialTheme.shapes.small).clickable(onClick = onSelect)
         .padding(8.dp).testTag("robot-${robot.name}")) {
         Row(verticalAlignment = Alignment.CenterVertically) {
             Spacer(Modifier.size(10.dp).background(connectionColour(connection), CircleShape))
@@ -104,8 +105,20 @@ private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () ->
             TextButton(onClick = onDisconnect, modifier = Modifier.height(32.dp).testTag("disconnect-${robot.name}")) { Text("Disconnect") }
         }
         Text("${describe(connection)} · ${robot.address}", style = MaterialTheme.typography.bodySmall)
-        Text("frames ${stats.framesReceived} in / ${stats.framesSent} out · dropped ${stats.dropped} · retries ${stats.retransmissions} · reconnects ${stats.reconnects}",
-            style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant)
+        LinkCounters(robot)
+    }
+}
+
+/** The part of a robot's card that keeps changing, in a scope of its own: the rest is not composed again with it. */
+@Composable
+private fun LinkCounters(robot: RobotModel) {
+    val stats by robot.robot.linkStats.collectAtHumanRate()
+    Text("${stats.framesReceived} frames in / ${stats.framesSent} out", style = MaterialTheme.typography.bodySmall,
+        color = MaterialTheme.colorScheme.onSurfaceVariant)
+    // Losses only when there are some: a healthy link says nothing more, and a troubled one stands out.
+    if (stats.dropped > 0 || stats.retransmissions > 0 || stats.reconnects > 0) {
+        Text("dropped ${stats.dropped} · retries ${stats.retransmissions} · reconnects ${stats.reconnects}",
+            Modifier.testTag("link-losses-${robot.name}"), style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.error)
     }
 }
 

@@ -15,7 +15,7 @@ import androidx.compose.foundation.layout.size
 import androidx.compose.foundation.layout.width
 import androidx.compose.foundation.rememberScrollState
 import androidx.compose.foundation.verticalScroll
-import androidx.compose.material3.Card
+import androidx.compose.material3.CardDefaults
 import androidx.compose.material3.MaterialTheme
 import androidx.compose.material3.Surface
 import androidx.compose.material3.Text
@@ -157,13 +157,16 @@ fun colourOf(c: Colour): Color = when (c) {
     Colour.UNKNOWN -> Color.Gray
 }
 
+/**
+ * A titled group of controls or values, drawn as a Card looks. Not a Card: that clips its content to its rounded
+ * shape, and Skia's software rasterizer builds such an anti-aliased clip again every frame the panel is drawn.
+ */
 @Composable
 fun Panel(title: String, modifier: Modifier = Modifier, content: @Composable ColumnScope.() -> Unit) {
-    Card(modifier) {
-        Column(Modifier.padding(12.dp), verticalArrangement = Arrangement.spacedBy(4.dp)) {
-            Text(title, style = MaterialTheme.typography.titleSmall, color = MaterialTheme.colorScheme.primary)
-            content()
-        }
+    Column(modifier.background(MaterialTheme.colorScheme.surfaceContainerHighest, CardDefaults.shape).padding(12.dp),
+        verticalArrangement = Arrangement.spacedBy(4.dp)) {
+        Text(title, style = MaterialTheme.typography.titleSmall, color = MaterialTheme.colorScheme.primary)
+        content()
     }
 }
 

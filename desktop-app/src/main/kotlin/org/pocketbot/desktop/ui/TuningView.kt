@@ -23,6 +23,7 @@ import androidx.compose.runtime.setValue
 import androidx.compose.ui.Alignment
 import androidx.compose.ui.Modifier
 import androidx.compose.ui.graphics.Color
+import androidx.compose.ui.graphics.graphicsLayer
 import androidx.compose.ui.platform.testTag
 import androidx.compose.ui.unit.dp
 import kotlinx.coroutines.delay
@@ -86,32 +87,35 @@ fun TuningView(robot: RobotModel) {
 /** How many samples reached the chart, against how many reduced states the robot sent meanwhile. */
 @Composable
 private fun LiveCount(robot: RobotModel) {
-    robot.robot.linkStats.collectAsState().value // recomposes as samples arrive
+    robot.robot.linkStats.collectAtHumanRate().value // recomposes as samples arrive, at a rate people read
     val active by robot.tuning.active.collectAsState()
     if (!active) return
     // Charted first, then the link's count as it is now (the collected value may be a frame behind): the link counts
     // a sample before the chart can have it, so "charted" never runs ahead of "sent".
     val charted = robot.tuning.live.added.get()
     val sent = robot.robot.linkStats.value.reducedStates - robot.tuning.reducedAtStart
-    Text("$charted samples charted of $sent sent", Modifier.testTag("tuning-count"), style = MaterialTheme.typography.bodySmall)
+    Text("$charted samples charted of $sent sent", Modifier.graphicsLayer().testTag("tuning-count"), style = MaterialTheme.typography.bodySmall)
 }
 
 /** The live chart: the last five seconds of robot time, redrawn once per frame from the sample ring. */
 @Composable
 private fun LiveChart(robot: RobotModel, controller: Controller, modifier: Modifier) {
-    var window by remember { mutableStateOf(robot.tuning.live.window(LIVE_SPAN_MS)) }
+    // Read while drawing only: a new window redraws the chart's canvas, and nothing is composed or laid out again.
+    val window = remember(robot) { mutableStateOf(robot.tuning.live.window(LIVE_SPAN_MS)) }
     LaunchedEffect(robot, controller) {
         var seen = -1L
         while (true) {
             val n = robot.tuning.live.added.get()
-            if (n != seen) { seen = n; window = robot.tuning.live.window(LIVE_SPAN_MS) }
+            if (n != seen) { seen = n; window.value = robot.tuning.live.window(LIVE_SPAN_MS) }
             delay(FRAME_MS) // about one frame: the ring keeps every sample meanwhile
         }
     }
-    LineChart(listOf(
-        Series("setpoint", window.seconds, window.setpoint, setpointColour),
-        Series("measured ${controller.title}" + if (controller.unit.isEmpty()) "" else " (${controller.unit})", window.seconds, window.measured, measuredColour),
-    ), "s", modifier.testTag("live-chart"))
+    val measured = "measured ${controller.title}" + if (controller.unit.isEmpty()) "" else " (${controller.unit})"
+    val legend = listOf("setpoint" to setpointColour, measured to measuredColour)
+    LineChart({
+        val w = window.value
+        listOf(Series("setpoint", w.seconds, w.setpoint, setpointColour), Series(measured, w.seconds, w.measured, measuredColour))
+    }, legend, "live chart of setpoint and $measured, the last ${LIVE_SPAN_MS / 1000} s", "s", modifier.testTag("live-chart"))
 }
 
 private fun stepSeries(now: StepResponse, previous: StepResponse?): List<Series> {

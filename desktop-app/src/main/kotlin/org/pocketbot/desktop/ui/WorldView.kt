@@ -3,6 +3,8 @@ package org.pocketbot.desktop.ui
 import androidx.compose.foundation.Canvas
 import androidx.compose.foundation.layout.Arrangement
 import androidx.compose.foundation.layout.Column
+import androidx.compose.foundation.layout.ExperimentalLayoutApi
+import androidx.compose.foundation.layout.FlowRow
 import androidx.compose.foundation.layout.Row
 import androidx.compose.foundation.layout.fillMaxWidth
 import androidx.compose.foundation.layout.width
@@ -29,9 +31,15 @@ import androidx.compose.ui.graphics.drawscope.DrawScope
 import androidx.compose.ui.graphics.drawscope.Stroke
 import androidx.compose.ui.graphics.drawscope.rotate
 import androidx.compose.ui.platform.testTag
+import androidx.compose.ui.semantics.contentDescription
+import androidx.compose.ui.semantics.semantics
+import androidx.compose.ui.text.drawText
+import androidx.compose.ui.text.rememberTextMeasurer
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
+import org.pocketbot.desktop.model.TrueRobot
 import org.pocketbot.desktop.model.WorldSnapshot
+import org.pocketbot.emulator.physics.RobotParams
 import org.pocketbot.emulator.world.Tape
 import org.pocketbot.emulator.world.TapeColour
 import org.pocketbot.emulator.world.World
@@ -40,8 +48,15 @@ import kotlin.math.cos
 import kotlin.math.min
 import kotlin.math.sin
 
-/** Colours of the robots, by their place in the panel's list (the same in every view). */
-val robotColours = listOf(Color(0xFF1565C0), Color(0xFFD84315), Color(0xFF2E7D32), Color(0xFF6A1B9A), Color(0xFF00838F), Color(0xFFF9A825))
+/**
+ * Colours of the robots, by their place in the panel's list (the same in every view). No orange or yellow among them:
+ * orange is the track token's light.
+ */
+val robotColours = listOf(Color(0xFF1565C0), Color(0xFF2E7D32), Color(0xFF6A1B9A), Color(0xFF00838F), Color(0xFFAD1457), Color(0xFF5D4037))
+
+/** The floor, the mark on a robot's front, and the ring round its token light. */
+val floorColour = Color(0xFFFAFAF5)
+val frontMarkColour = Color.White
 
 /** Maps world metres (y up) to canvas pixels, keeping the aspect ratio. */
 class WorldFrame(val xMin: Double, val yMin: Double, val xMax: Double, val yMax: Double, size: Size) {
@@ -59,7 +74,7 @@ fun tapeColour(c: TapeColour): Color = Color(c.r, c.g, c.b)
 fun DrawScope.drawWorld(world: World, frame: WorldFrame, boxes: List<Pose>) {
     val floorTopLeft = frame.at(0.0, world.heightM)
     val floorBottomRight = frame.at(world.widthM, 0.0)
-    drawRect(Color(0xFFFAFAF5), floorTopLeft, Size(floorBottomRight.x - floorTopLeft.x, floorBottomRight.y - floorTopLeft.y))
+    drawRect(floorColour, floorTopLeft, Size(floorBottomRight.x - floorTopLeft.x, floorBottomRight.y - floorTopLeft.y))
     for (tape in world.tapes) {
         val stroke = Stroke(width = frame.length(tape.widthM).coerceAtLeast(1.5f), cap = StrokeCap.Round)
         val path = Path()
@@ -89,18 +104,61 @@ fun DrawScope.drawWorld(world: World, frame: WorldFrame, boxes: List<Pose>) {
     }
 }
 
-/** A robot: a filled body for the true pose, an outline for the odometry pose; a line shows the heading. */
-fun DrawScope.drawRobot(pose: Pose, frame: WorldFrame, colour: Color, filled: Boolean) {
-    val c = frame.at(pose.xM, pose.yM)
-    val r = frame.length(ROBOT_RADIUS_M).coerceAtLeast(4f)
-    if (filled) drawCircle(colour.copy(alpha = 0.85f), r, c) else drawCircle(colour, r, c, style = Stroke(2f))
-    val tip = frame.at(pose.xM + ROBOT_RADIUS_M * 1.4 * cos(pose.headingRad), pose.yM + ROBOT_RADIUS_M * 1.4 * sin(pose.headingRad))
-    drawLine(if (filled) Color.Black else colour, c, tip, strokeWidth = 2f)
+/**
+ * A PocketBot2 as drawn: its body ([RobotParams] length along the heading, width across), a triangle on its front
+ * pointing the way it faces, and the token light in its middle. Points are (forward, left) in metres from the body's
+ * centre; [at] turns them into world coordinates for a pose.
+ */
+object RobotShape {
+    private val params = RobotParams()
+    val lengthM = params.lengthM
+    val widthM = params.widthM
+    val body = listOf(lengthM / 2 to widthM / 2, -lengthM / 2 to widthM / 2, -lengthM / 2 to -widthM / 2, lengthM / 2 to -widthM / 2)
+    val frontMark = listOf(lengthM / 2 - 0.002 to 0.0, 0.011 to 0.008, 0.011 to -0.008)
+    const val LIGHT_RADIUS_M = 0.005
+
+    /** A point well inside the front mark, and one as far behind the centre: only the first is [frontMarkColour]. */
+    val insideFrontMark = 0.015 to 0.0
+    val insideRear = -0.015 to 0.0
+
+    /** The world coordinates (x, y) of the body point ([forward], [left]) of a robot at [pose]. */
+    fun at(pose: Pose, forward: Double, left: Double): Pair<Double, Double> {
+        val c = cos(pose.headingRad)
+        val s = sin(pose.headingRad)
+        return pose.xM + forward * c - left * s to pose.yM + forward * s + left * c
+    }
 }
 
-private const val ROBOT_RADIUS_M = 0.022
+/**
+ * A robot at [pose]: its body filled in [colour] with a white triangle on its front (the true pose) or, when not
+ * [filled], the same shape outlined (the odometry pose); [token] lights its orange light, with a glow round it.
+ */
+fun DrawScope.drawRobot(pose: Pose, frame: WorldFrame, colour: Color, filled: Boolean, token: Boolean = false) {
+    fun path(points: List<Pair<Double, Double>>) = Path().apply {
+        points.forEachIndexed { i, (f, l) ->
+            val (x, y) = RobotShape.at(pose, f, l)
+            frame.at(x, y).let { if (i == 0) moveTo(it.x, it.y) else lineTo(it.x, it.y) }
+        }
+        close()
+    }
+    if (!filled) {
+        drawPath(path(RobotShape.body), colour, style = Stroke(2f))
+        drawPath(path(RobotShape.frontMark), colour, style = Stroke(1.5f))
+        return
+    }
+    drawPath(path(RobotShape.body), colour)
+    val c = frame.at(pose.xM, pose.yM)
+    val r = frame.length(RobotShape.LIGHT_RADIUS_M).coerceAtLeast(4f)
+    if (token) drawCircle(tokenColour.copy(alpha = 0.45f), r * 2.2f, c)
+    drawPath(path(RobotShape.frontMark), frontMarkColour)
+    if (token) {
+        drawCircle(Color.White, r + 1.5f, c)
+        drawCircle(tokenColour, r, c)
+    }
+}
 
 /** The embedded emulator's world, live: tape, boxes, each robot's true pose and its odometry pose; and its controls. */
+@OptIn(ExperimentalLayoutApi::class)
 @Composable
 fun WorldView(model: PanelModel) {
     val emulator = model.emulator
@@ -123,7 +181,8 @@ fun WorldView(model: PanelModel) {
             OutlinedButton(onClick = { emulator.singleStep() }, Modifier.testTag("emu-step")) { Text("Step 1 ms") }
             for (f in listOf(0.5, 1.0, 2.0, 5.0)) FilterChip(speed == f, { emulator.setSpeed(f) }, { Text("x$f") }, Modifier.testTag("emu-speed-$f"))
         }
-        Row(horizontalArrangement = Arrangement.spacedBy(6.dp), verticalAlignment = Alignment.CenterVertically) {
+        // Wraps onto a second line where the view is too narrow for every shipped world.
+        FlowRow(horizontalArrangement = Arrangement.spacedBy(6.dp), itemVerticalAlignment = Alignment.CenterVertically) {
             for (name in emulator.shippedWorlds) FilterChip(worldName == name, { worldName = name }, { Text(name) }, Modifier.testTag("world-$name"))
             OutlinedButton(onClick = { chooseFile("Open a world file", save = false)?.let { worldName = it.path } }) { Text("World file...") }
         }
@@ -132,18 +191,33 @@ fun WorldView(model: PanelModel) {
             Button(onClick = { model.restartEmulator(worldName, count.trim().toIntOrNull() ?: -1) }, Modifier.testTag("emu-restart")) {
                 Text("Restart with $worldName".let { if (it.length > 40) "Restart with world file" else it })
             }
-            Text("filled: true pose · ring: odometry", style = MaterialTheme.typography.bodySmall)
+            Text("filled: true pose · outline: odometry where it differs · white triangle: front · orange light: track token",
+                style = MaterialTheme.typography.bodySmall)
         }
         NetworkRow(model, snapshot)
-        Canvas(Modifier.weight(1f).fillMaxWidth().testTag("world-canvas")) {
+        val measurer = rememberTextMeasurer()
+        val labelStyle = MaterialTheme.typography.labelSmall.copy(color = MaterialTheme.colorScheme.onSurface)
+        val holders = snapshot.robots.filter { it.holdsToken }.map { t -> robots.firstOrNull { it.address == t.address }?.name ?: "robot ${t.id}" }
+        Canvas(Modifier.weight(1f).fillMaxWidth().testTag("world-canvas").semantics {
+            contentDescription = "world ${snapshot.world.name}, ${snapshot.robots.size} robots" +
+                if (holders.isEmpty()) "" else "; the track token is with ${holders.joinToString()}"
+        }) {
             val w = snapshot.world
             val frame = WorldFrame(0.0, 0.0, w.widthM, w.heightM, size)
             drawWorld(w, frame, snapshot.boxes)
-            for (t in snapshot.robots) {
-                val index = robots.indexOfFirst { it.address == t.address }
-                val colour = robotColours[(if (index >= 0) index else t.id) % robotColours.size]
-                drawRobot(t.pose, frame, colour, filled = true)
-                if (index >= 0) drawRobot(robots[index].robot.odometry.pose.value, frame, colour, filled = false)
+            val drawn = snapshot.robots.map { t -> t to robots.indexOfFirst { it.address == t.address } }
+            fun colourOf(t: TrueRobot, index: Int) = robotColours[(if (index >= 0) index else t.id) % robotColours.size]
+            // Odometry underneath: where it agrees with the truth the body covers it, where it drifts it shows.
+            for ((t, index) in drawn) if (index >= 0) drawRobot(robots[index].robot.odometry.pose.value, frame, colourOf(t, index), filled = false)
+            for ((t, index) in drawn) drawRobot(t.pose, frame, colourOf(t, index), filled = true, token = t.holdsToken)
+            // Names last, on a pale ground (readable over tape), beside each body whichever way it faces.
+            for ((t, index) in drawn) {
+                val label = measurer.measure(if (index >= 0) robots[index].name else "robot ${t.id}", labelStyle)
+                val c = frame.at(t.pose.xM, t.pose.yM)
+                val clear = frame.length(RobotShape.lengthM / 2) + 4f
+                val at = Offset(c.x + clear, c.y - clear - label.size.height)
+                drawRect(floorColour.copy(alpha = 0.8f), at, Size(label.size.width.toFloat(), label.size.height.toFloat()))
+                drawText(label, topLeft = at)
             }
         }
     }
