@@ -36,10 +36,16 @@ import kotlin.time.Duration.Companion.seconds
  * layout + drawing time of a frame (p50, p95; goal p95 <= 16 ms), on the tuning view and on the fleet overview, and
  * the CPU time the rendering thread spent on it.
  *
- * Arguments: `--seconds N` per view (default 10); `--phases` times each step of a frame instead (see [Phases]).
+ * Both views are first rendered unmeasured for `--warmup` seconds each: until then the JIT compiles the panel's code on
+ * the same two cores (a C2 compiler thread at a third of a core 10 s in) and the tuning chart is still filling.
+ *
+ * Arguments: `--seconds N` per view (default 10); `--warmup N` per view (default 5); `--phases` times each step of a
+ * frame instead (see [Phases]).
  */
 fun main(args: Array<String>): Unit = runBlocking {
-    val seconds = args.indexOf("--seconds").takeIf { it >= 0 }?.let { args[it + 1].toInt() } ?: 10
+    fun option(name: String, default: Int) = args.indexOf(name).takeIf { it >= 0 }?.let { args[it + 1].toInt() } ?: default
+    val seconds = option("--seconds", 10)
+    val warmup = option("--warmup", 5)
     val phased = "--phases" in args
     val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
     val emulator = EmulatorModel(scope, "round", robots = 8)
@@ -63,6 +69,10 @@ fun main(args: Array<String>): Unit = runBlocking {
         val scene = ImageComposeScene(1440, 900, Density(1f)) { PanelApp(panel, view) }
         val phases = if (phased) listOf(Phases(scene, 1440, 900), Phases(scene, 1440, 900)) else listOf(null, null)
         try {
+            frames(scene, warmup)
+            view.value = View.OVERVIEW
+            frames(scene, warmup)
+            view.value = View.TUNING
             val tuning = frames(scene, seconds, phases[0])
             view.value = View.OVERVIEW
             val overview = frames(scene, seconds, phases[1])
