@@ -101,9 +101,10 @@ class InfoCommand : RobotCommand("info") {
     override fun help(context: Context) = "Identity, firmware and protocol version, layout hash and link of a robot.\n\nExample: pocketbot info PocketBot-1"
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
-        for (r in robots) {
-            // The battery comes with the first full state after the handshake; a robot that sends none shows no battery.
-            val state = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }
+        // The battery comes with the first full state after the handshake; a robot that sends none shows no battery.
+        // Waited for on every robot at once: a fleet of silent robots costs one timeout, not one each.
+        val states = robots.map { r -> async { withTimeoutOrNull(FIRST_STATE) { r.reportedState() } } }.awaitAll()
+        for ((r, state) in robots.zip(states)) {
             val id = r.identity
             val stats = r.linkStats.value
             out.row(

@@ -33,6 +33,7 @@ import org.pocketbot.protocol.LineFlags
 
 private val columns = listOf("robot" to 160, "battery" to 80, "mode" to 110, "speed" to 110, "line" to 130, "track" to 190, "link" to 280)
 private val tableWidth = columns.sumOf { it.second }.dp
+private fun width(column: String) = columns.first { it.first == column }.second.dp
 
 /** Every connected robot side by side, one row each: for fleets. A click selects a robot. */
 @Composable
@@ -62,8 +63,8 @@ private fun OverviewRow(robot: RobotModel, selected: Boolean, onClick: () -> Uni
     Row(Modifier.width(tableWidth).graphicsLayer().background(bg).clickable(onClick = onClick).padding(vertical = 6.dp).testTag("overview-${robot.name}"),
         verticalAlignment = Alignment.CenterVertically) {
         StateCells(robot, freshness)
-        TrackCell(robot, Modifier.width(columns[5].second.dp), stale = freshness != Freshness.ALL)
-        LinkCell(robot, Modifier.width(columns[6].second.dp))
+        TrackCell(robot, Modifier.width(width("track")), stale = freshness != Freshness.ALL)
+        LinkCell(robot, Modifier.width(width("link")))
     }
 }
 
