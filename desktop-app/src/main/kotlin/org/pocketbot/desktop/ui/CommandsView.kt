@@ -140,7 +140,7 @@ private fun MovementList(robot: RobotModel) {
             val result = m.result
             Row(Modifier.fillMaxWidth().testTag("movement-${m.handle.id}")) {
                 Text("#${m.handle.id}", Modifier.width(72.dp), style = MaterialTheme.typography.bodySmall)
-                Text(m.text, Modifier.weight(1f), style = MaterialTheme.typography.bodySmall)
+                Text(m.text, Modifier.weight(1f).padding(end = 12.dp), style = MaterialTheme.typography.bodySmall)
                 Text(result?.let { r -> r.outcome.name.lowercase() + (r.done?.let { " (%.3f %s)".format(it, m.handle.movement.unit) } ?: "") } ?: "queued",
                     Modifier.width(170.dp).testTag("result-${m.handle.id}"), style = MaterialTheme.typography.bodySmall)
             }
