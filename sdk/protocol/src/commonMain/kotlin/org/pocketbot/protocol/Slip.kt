@@ -30,6 +30,11 @@ public object Slip {
  * Splits a SLIP byte stream into frames, however the stream was cut into chunks. Empty frames (END END) are
  * skipped silently; a frame longer than [maxFrame] is dropped and reported as [ProtocolError.TooLong], an invalid
  * escape as [ProtocolError.Framing]; decoding resumes at the next END. Not thread-safe: one per stream.
+ *
+ * The bytes before the stream's first END are skipped, not reported: a receiver that joins a stream while the other
+ * side is sending (a host connecting to a robot that streams its state) first gets the tail of a frame it never had
+ * the start of, and that frame was not lost on this link. No frame is lost by it either: [Slip.encode] and the
+ * firmware begin every frame with an END.
  */
 public class SlipDecoder(private val maxFrame: Int = Frames.MAX_FRAME) {
     private val buf = ByteArray(maxFrame)
@@ -37,6 +42,7 @@ public class SlipDecoder(private val maxFrame: Int = Frames.MAX_FRAME) {
     private var escaped = false
     private var broken: String? = null
     private var overflow = 0
+    private var joined = false
 
     /** Feeds [length] bytes from [offset]; calls [onFrame] for each complete frame and [onError] for each dropped one. */
     public fun feed(
@@ -45,6 +51,10 @@ public class SlipDecoder(private val maxFrame: Int = Frames.MAX_FRAME) {
     ) {
         for (i in offset until offset + length) {
             val b = bytes[i]
+            if (!joined) {
+                joined = b == Slip.END
+                continue
+            }
             if (b == Slip.END) {
                 val reason = broken
                 when {

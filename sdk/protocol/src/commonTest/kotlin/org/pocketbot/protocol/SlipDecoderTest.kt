@@ -71,10 +71,19 @@ class SlipDecoderTest {
     }
 
     @Test
-    fun garbageBeforeTheFirstEndBecomesAFrameThatFailsItsCrc() {
-        val (out, _) = decodeChunks(listOf(byteArrayOf(1, 2, 3, 4, 5, 6), stream))
-        assertEquals(frames.size + 1, out.size)
-        assertTrue(Frames.decode(out[0]) is FrameResult.Failed)
-        assertFrames(frames, out.drop(1))
+    fun aStreamJoinedInsideAFrameStartsAtTheNextFrameWithoutAnError() {
+        // The tail of a frame sent before the receiver joined: escapes, an END inside it, whatever it holds.
+        val earlier = Slip.encode(frames[1])
+        val (out, errors) = decodeChunks(listOf(earlier.copyOfRange(earlier.size - 6, earlier.size), stream))
+        assertFrames(frames, out)
+        assertTrue(errors.isEmpty(), "$errors")
+    }
+
+    @Test
+    fun garbageBetweenFramesBecomesAFrameThatFailsItsCrc() {
+        val (out, _) = decodeChunks(listOf(Slip.encode(frames[0]), byteArrayOf(1, 2, 3, 4, 5, 6), stream))
+        assertEquals(frames.size + 2, out.size)
+        assertTrue(Frames.decode(out[1]) is FrameResult.Failed)
+        assertFrames(listOf(frames[0]) + frames, out.take(1) + out.drop(2))
     }
 }
