@@ -119,7 +119,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
 
     /** Advances simulated time by [steps] milliseconds. */
     public fun step(steps: Int = 1) {
-        repeat(steps) { synchronized(lock) { stepLocked() } }
+        repeat(steps) { synchronized(lock) { modes.pace = 0.0; stepLocked() } }
     }
 
     public fun runFor(duration: Duration) {
@@ -127,7 +127,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         var done = 0L
         while (done < steps) {
             val n = minOf(50L, steps - done).toInt()
-            synchronized(lock) { repeat(n) { stepLocked() } }
+            synchronized(lock) { modes.pace = 0.0; repeat(n) { stepLocked() } }
             done += n
         }
     }
@@ -210,13 +210,13 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
             val sp = speed
             if (wasPaused || sp != lastSpeed) { wallStart = clock.nanoTime(); simStart = timeTicks; lastSpeed = sp; wasPaused = false }
             when (sp) {
-                Speed.AsFastAsPossible -> synchronized(lock) { repeat(20) { stepLocked() } }
+                Speed.AsFastAsPossible -> synchronized(lock) { modes.pace = 0.0; repeat(20) { stepLocked() } }
                 is Speed.Realtime -> {
                     val elapsedNs = clock.nanoTime() - wallStart
                     val target = simStart + (elapsedNs * sp.factor * SimTime.TICKS_PER_SECOND / 1e9).toLong()
                     val behind = (target - timeTicks) / SimTime.STEP_TICKS
                     if (behind <= 0) clock.sleep(1)
-                    else synchronized(lock) { repeat(minOf(behind, 200L).toInt()) { stepLocked() } }
+                    else synchronized(lock) { modes.pace = sp.factor; repeat(minOf(behind, 200L).toInt()) { stepLocked() } }
                 }
             }
         }
@@ -326,6 +326,10 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
  * Picks serial or parallel stepping by measuring both: handing a step to other threads pays off only when the
  * step is long enough and the other cores are free, which depends on the fleet and on the machine's load at
  * the time. Either mode gives exactly the same results.
+ *
+ * Kept to a clock ([pace]), the emulator steps serially whenever one thread keeps up with half a core or less:
+ * there a second thread would not make it any faster, only cost CPU (the hand-over and the waiting for the next
+ * step), which is what a user running a few robots in real time next to the panel would pay for nothing.
  */
 private class StepModeChooser(private val threads: Int, private val parallelFrom: Int, private val counts: () -> String) {
     private var robots = -1
@@ -335,9 +339,12 @@ private class StepModeChooser(private val threads: Int, private val parallelFrom
     private var epochs = 0
     private val avgNs = doubleArrayOf(Double.NaN, Double.NaN) // serial, parallel
 
+    /** Simulated ms to step per wall-clock ms while kept to a clock ([Speed.Realtime]), 0 while as fast as possible. */
+    var pace = 0.0
+
     fun parallel(n: Int): Boolean {
         if (threads <= 1 || n < parallelFrom) return false
-        if (n != robots) { robots = n; avgNs.fill(Double.NaN); current = true; steps = 0; epochNs = 0; epochs = 0 }
+        if (n != robots) { robots = n; avgNs.fill(Double.NaN); current = pace == 0.0; steps = 0; epochNs = 0; epochs = 0 }
         return current
     }
 
@@ -352,14 +359,19 @@ private class StepModeChooser(private val threads: Int, private val parallelFrom
         if (DEBUG) System.err.println("step modes: robots=$robots epoch=$epochs ${if (k == 1) "parallel" else "serial"} ${"%.1f".format(perStep / 1000)} us/step; avg serial=${"%.1f".format(avgNs[0] / 1000)} parallel=${"%.1f".format(avgNs[1] / 1000)} tasks by thread ${counts()}")
         val other = 1 - k
         current = when {
+            serialKeepsPace() -> false
             avgNs[other].isNaN() -> other == 1
             epochs % PROBE_EVERY == 0 -> other == 1 // look at the other mode again now and then
             else -> avgNs[1] < avgNs[0]
         }
     }
 
+    private fun serialKeepsPace() = pace > 0 && !avgNs[0].isNaN() && avgNs[0] * pace <= PACED_SERIAL_NS_PER_MS
+
     private companion object {
         val DEBUG = System.getProperty("pocketbot.emulator.debugModes") == "true"
+        /** Serial stepping that needs at most this much of each wall-clock millisecond (half a core) keeps pace. */
+        const val PACED_SERIAL_NS_PER_MS = 500_000.0
         const val EPOCH = 250
         const val PROBE_EVERY = 8
     }

@@ -77,6 +77,30 @@ class RunModesTest {
     }
 
     @Test
+    fun `in real time a fleet that one thread keeps up with is stepped on one thread, the other cores stay idle`() {
+        val threads = java.lang.management.ManagementFactory.getThreadMXBean()
+        fun workersCpuNs() = Thread.getAllStackTraces().keys.filter { it.name.startsWith("emulator-step-") }
+            .sumOf { threads.getThreadCpuTime(it.id).coerceAtLeast(0) }
+        RealFirmware.emulator("round").use { emu -> // the default config: as many stepping threads as cores
+            repeat(8) { k -> // the panel's typical fleet, round the track
+                val a = Math.toRadians(k * 45.0)
+                emu.addRobot(pose = org.pocketbot.sdk.Pose.ofDegrees(0.4 + 0.3 * kotlin.math.cos(a), 0.4 + 0.3 * kotlin.math.sin(a), k * 45.0 + 90))
+            }
+            emu.runFor(3.seconds) // as fast as it goes: the JIT compiles the firmware, both modes are measured
+            emu.start(Speed.Realtime(1.0))
+            eventually("half a second in real time") { emu.time.inWholeMilliseconds >= 3500 }
+            val cpu0 = workersCpuNs()
+            val wall0 = System.nanoTime()
+            eventually("1.5 s more") { emu.time.inWholeMilliseconds >= 5000 }
+            emu.stop()
+            val share = (workersCpuNs() - cpu0).toDouble() / (System.nanoTime() - wall0)
+            // A worker that polls for work while there is none (every 50 us, as it once did) used 9 % here; one
+            // stepping in parallel in real time spins after every 1 ms step for the next one, a third of a core.
+            assertTrue(share < 0.05, "the other stepping threads used ${"%.0f".format(share * 100)} % of a core")
+        }
+    }
+
+    @Test
     fun `the discoverer finds every robot and connects to it`() = RealFirmware.emulator("round").use { emu ->
         repeat(3) { emu.addRobot() }
         emu.start(Speed.Realtime(4.0))

@@ -20,6 +20,10 @@ import kotlin.time.Duration.Companion.seconds
  * Prints per fleet size `emulator robots=<N> realtime_factor=<X>`, `emulator robots=<N> cpu_us_per_robot_ms=<X>`
  * (CPU of the whole process per robot and simulated millisecond: the cost curve over N) and
  * `emulator robots=<N> heap_bytes_per_robot=<X>` (live heap after a GC, less the empty emulator's) on stdout.
+ * On stderr per fleet: the realtime factor of each simulated second (lowest, median, highest: how much the machine
+ * varied during the run), and two hashes of the end state: `state_hash` of everything simulated, firmware memory
+ * included, and `pose_hash` of the robots' true poses alone, which stays the same for a firmware build that differs
+ * only in its code or memory layout (another compiler flag) and behaves the same.
  * The fleet shares a floor of round tracks (thesis A.3) laid side by side, three robots per track.
  * Args: fleet sizes (default 1 10 100 1000).
  */
@@ -34,10 +38,14 @@ public fun main(args: Array<String>) {
         println("emulator robots=$n cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)}")
         println("emulator robots=$n heap_bytes_per_robot=${result.heapBytesPerRobot}")
         System.out.flush()
+        val perSecond = result.secondFactors.sorted()
         System.err.println(
             "  robots=$n simulated=${result.simulatedS}s wall=${"%.2f".format(result.wallS)}s " +
                 "on_line=${result.onLine}/$n threads=${result.threads} " +
-                "cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)} loadavg=${loadAverage()}",
+                "cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)} loadavg=${loadAverage()}\n" +
+                "    realtime_factor per simulated second: lowest ${"%.2f".format(perSecond.first())} " +
+                "median ${"%.2f".format(perSecond[perSecond.size / 2])} highest ${"%.2f".format(perSecond.last())}; " +
+                "state_hash=${result.stateHash} pose_hash=${result.poseHash}",
         )
     }
 }
@@ -47,7 +55,8 @@ private fun loadAverage(): String =
 
 private class Result(
     val factor: Double, val simulatedS: Int, val wallS: Double, val onLine: Int, val threads: Int,
-    val cpuUsPerRobotMs: Double, val heapBytesPerRobot: Long,
+    val cpuUsPerRobotMs: Double, val heapBytesPerRobot: Long, val secondFactors: List<Double>, val stateHash: String,
+    val poseHash: String,
 )
 
 /** Live heap after a full collection, in bytes. */
@@ -91,7 +100,11 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
         val os = java.lang.management.ManagementFactory.getOperatingSystemMXBean() as com.sun.management.OperatingSystemMXBean
         val cpu0 = os.processCpuTime
         val t0 = System.nanoTime()
-        emu.runFor(simS.seconds)
+        val secondFactors = List(simS) {
+            val start = System.nanoTime()
+            emu.runFor(1.seconds)
+            1e9 / (System.nanoTime() - start)
+        }
         val wall = (System.nanoTime() - t0) / 1e9
         val cpuUs = (os.processCpuTime - cpu0) / 1e3
         var onLine = 0
@@ -101,6 +114,14 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
             val p = r.truePose
             if (abs(hypot(p.xM - cx, p.yM - cy) - track.radiusM) < 0.01 && r.trueWheelDistances.leftM > 0.2) onLine++
         }
-        return Result(simS / wall, simS, wall, onLine, config.threads, cpuUs / (n * simS * 1000.0), heapPerRobot)
+        val poseHash = java.security.MessageDigest.getInstance("SHA-256").run {
+            val pose = java.nio.ByteBuffer.allocate(24)
+            for (r in emu.robots) r.truePose.let { update(pose.clear().putDouble(it.xM).putDouble(it.yM).putDouble(it.headingRad).array()) }
+            digest().joinToString("") { "%02x".format(it) }
+        }
+        return Result(
+            simS / wall, simS, wall, onLine, config.threads, cpuUs / (n * simS * 1000.0), heapPerRobot, secondFactors,
+            emu.stateHash().take(16), poseHash.take(16),
+        )
     }
 }

@@ -76,7 +76,8 @@ internal class ParallelStepper(val threads: Int) : AutoCloseable {
         while (!closed) {
             var spins = 0
             while (!closed && (job?.round ?: seen) == seen) {
-                if (++spins < SPINS) Thread.onSpinWait() else LockSupport.parkNanos(50_000)
+                // Parked until the next round's unpark (or close): an idle or paused emulator's workers take no CPU.
+                if (++spins < SPINS) Thread.onSpinWait() else LockSupport.park(this)
             }
             if (closed) return
             active.incrementAndGet()
