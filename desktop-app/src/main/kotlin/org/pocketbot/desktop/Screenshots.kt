@@ -65,10 +65,11 @@ fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<Vie
         onTrack.forEach { r -> r.emulated?.let { r.robot.odometry.reset(it.truePose) } }
         model.everyRobot { it.startTrack() }
         delay(8000) // the robots get going and meet
-        model.select(onTrack.firstOrNull { it.robot.track.holdsToken } ?: onTrack.first())
+        fun selectTokenHolder() = model.select(onTrack.firstOrNull { it.robot.track.holdsToken } ?: onTrack.first())
+        selectTokenHolder()
         shoot(View.OVERVIEW, "overview")
         shoot(View.WORLD, "world")
-        model.select(onTrack.firstOrNull { it.robot.track.holdsToken } ?: onTrack.first())
+        selectTokenHolder() // the token has moved on meanwhile, most likely
         shoot(View.COMMANDS, "track")
         done()
     }

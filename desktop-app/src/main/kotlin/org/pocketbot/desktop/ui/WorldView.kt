@@ -197,7 +197,9 @@ fun WorldView(model: PanelModel) {
         NetworkRow(model, snapshot)
         val measurer = rememberTextMeasurer()
         val labelStyle = MaterialTheme.typography.labelSmall.copy(color = MaterialTheme.colorScheme.onSurface)
-        val holders = snapshot.robots.filter { it.holdsToken }.map { t -> robots.firstOrNull { it.address == t.address }?.name ?: "robot ${t.id}" }
+        /** The panel's name of an emulated robot, or its id when the panel is not connected to it. */
+        fun nameOf(t: TrueRobot) = robots.firstOrNull { it.address == t.address }?.name ?: "robot ${t.id}"
+        val holders = snapshot.robots.filter { it.holdsToken }.map(::nameOf)
         Canvas(Modifier.weight(1f).fillMaxWidth().testTag("world-canvas").semantics {
             contentDescription = "world ${snapshot.world.name}, ${snapshot.robots.size} robots" +
                 if (holders.isEmpty()) "" else "; the track token is with ${holders.joinToString()}"
@@ -212,7 +214,7 @@ fun WorldView(model: PanelModel) {
             for ((t, index) in drawn) drawRobot(t.pose, frame, colourOf(t, index), filled = true, token = t.holdsToken)
             // Names last, on a pale ground (readable over tape), beside each body whichever way it faces.
             for ((t, index) in drawn) {
-                val label = measurer.measure(if (index >= 0) robots[index].name else "robot ${t.id}", labelStyle)
+                val label = measurer.measure(nameOf(t), labelStyle)
                 val c = frame.at(t.pose.xM, t.pose.yM)
                 val clear = frame.length(RobotShape.lengthM / 2) + 4f
                 val at = Offset(c.x + clear, c.y - clear - label.size.height)

@@ -43,6 +43,8 @@ public class FirmwareImage internal constructor(
         val fresh = FirmwareEngine(this)
         initialMemory = fresh.memory.bytes.copyOf()
         initialGlobals = fresh.initialGlobals()
+        if (sharesEngines) engines.set(fresh) // this thread's engine: [FirmwareEngine.enter] loads a robot's state into it
+
     }
 
     public companion object {
