@@ -37,6 +37,7 @@ int main(int argc, char **argv)
     suite_debug();
     suite_scheduler();
     suite_track();
+    suite_links();
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }
