@@ -17,6 +17,7 @@ import com.github.ajalt.clikt.parameters.types.int
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.TimeoutCancellationException
 import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import org.pocketbot.emulator.cli.EmulatorCommand
 import org.pocketbot.sdk.CommandRefusedException
@@ -29,6 +30,7 @@ import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.ProtocolMismatchException
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.transport.EmulatorDiscoverer
 import org.pocketbot.sdk.transport.TransportLostException
@@ -119,6 +121,14 @@ fun run(args: Array<String>): Int {
     }
 }
 
+/** What happened to a robot while a command ran, on stderr: a script's output stays clean. */
+private fun tell(robot: Robot, event: RobotEvent) = when (event) {
+    is RobotEvent.Restarted ->
+        System.err.println("pocketbot: ${robot.identity.name} restarted: its clock went back from ${event.lastSeenTimeMs / 1000.0} s to ${event.timeMs / 1000.0} s")
+    is RobotEvent.DriverChanged ->
+        if (event.taken) System.err.println("pocketbot: ${robot.identity.name} was taken over by ${event.driving.driver}") else Unit
+}
+
 fun main(args: Array<String>) {
     exitProcess(run(args))
 }
@@ -138,6 +148,7 @@ fun robotCommand(
     val code = runBlocking {
         val progress = Progress()
         var robots = emptyList<Robot>()
+        var listening = emptyList<kotlinx.coroutines.Job>()
         try {
             progress.show("looking for robots")
             // Robots named by name or address end the search once all are found; ids and --all need the whole scan;
@@ -146,6 +157,7 @@ fun robotCommand(
                 !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
             })
             robots = connectRobots(found, names, all, globals.options.copy(role = role), progress)
+            listening = robots.map { r -> launch { r.events.collect { tell(r, it) } } }
             if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
                 throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
             }
@@ -160,6 +172,7 @@ fun robotCommand(
             System.err.println("pocketbot: ${e.message ?: e}" + if (e is NotDriverException) " (use --take-over)" else "")
             Exit.of(e)
         } finally {
+            listening.forEach { it.cancel() }
             for (r in robots) r.disconnect(onLeave)
         }
     }
