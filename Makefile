@@ -11,7 +11,7 @@
 #   make push        thesis A.2: two robots push a heavy box off the track (host-coordinated), simulated time
 #   make track       thesis A.3: three robots on a track, the behaviour in their firmware, simulated time
 #   make emulator    run the emulator CLI, e.g. make emulator ARGS="--robots 3"
-#   make jvm         mvn install of the reactor (no tests), after the firmware wasm
+#   make jvm         mvn package of the reactor (no tests), after the firmware wasm
 #   make bench | bench-emulator | profile-emulator | bench-sdk | bench-desktop | fuzz | clean
 
 MVN       ?= mvn -B
@@ -70,7 +70,7 @@ protocol-check: deps
 	$(PYTHON) protocol/gen.py --check
 
 jvm: wasm
-	$(MAVEN) install -DskipTests
+	$(MAVEN) package -DskipTests
 
 # Sequential on purpose (also under make -j): cheap checks first, the long Maven build last.
 # -fae: a failing module still lets the independent ones run, so the log has every count.
@@ -99,11 +99,16 @@ run: wasm
 	  $(JAVA) -cp "$(call cp_of,examples)" $(RUN_MAIN) $(ARGS); fi
 
 EMULATOR_STAMP := emulator/target/classpath.txt
-EMULATOR_INPUTS := $(shell find pom.xml .mvn sdk/protocol sdk/core emulator -name target -prune -o -type f \
+EMULATOR_CLI_STAMP := emulator/cli/target/classpath.txt
+EMULATOR_INPUTS := $(shell find pom.xml .mvn library sdk/protocol sdk/core emulator -name target -prune -o -type f \
                      \( -name '*.kt' -o -name 'pom.xml' -o -name '*.json' -o -name 'jvm.config' \) -print 2>/dev/null)
 
 $(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM))
 	$(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true
+	@touch $@
+
+$(EMULATOR_CLI_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM))
+	$(MAVEN) package -pl emulator/cli -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
 CLI_STAMP := cli/target/classpath.txt
@@ -149,8 +154,8 @@ track: wasm
 	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,examples)" $(TRACK_MAIN) $(ARGS)
 
 emulator: wasm
-	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
-	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(EMULATOR_MAIN) $(ARGS)
+	@$(MAKE) --no-print-directory $(EMULATOR_CLI_STAMP)
+	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator/cli)" $(EMULATOR_MAIN) $(ARGS)
 
 bench: bench-emulator bench-sdk bench-desktop
 	$(MAKE) -C firmware bench
