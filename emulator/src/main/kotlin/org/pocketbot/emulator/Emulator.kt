@@ -19,8 +19,12 @@ import kotlin.time.Duration
 /** How fast simulated time runs when the emulator runs on its own thread. */
 public sealed interface Speed {
     /** Simulated time runs at [factor] times the wall clock (1.0 = real time). */
-    public data class Realtime(val factor: Double = 1.0) : Speed {
+    public class Realtime(public val factor: Double = 1.0) : Speed {
         init { require(factor > 0) { "factor must be positive" } }
+
+        override fun equals(other: Any?): Boolean = other is Realtime && other.factor == factor
+        override fun hashCode(): Int = factor.hashCode()
+        override fun toString(): String = "Realtime(x$factor)"
     }
 
     /** As fast as the machine allows. */
@@ -28,19 +32,19 @@ public sealed interface Speed {
 }
 
 /** Settings of an [Emulator]. */
-public data class EmulatorConfig(
+public class EmulatorConfig(
     /** Seeds every random effect (sensor noise, encoder phases, link faults): same world + seed = same run. */
-    val seed: Long = 1,
+    public val seed: Long = 1,
     /** The firmware every robot runs; by default the build-time compiled firmware. */
-    val firmware: FirmwareImage? = null,
-    val robotParams: RobotParams = RobotParams(),
-    val noise: NoiseSettings = NoiseSettings(),
+    public val firmware: FirmwareImage? = null,
+    public val robotParams: RobotParams = RobotParams(),
+    public val noise: NoiseSettings = NoiseSettings(),
     /** Threads that step robots (the caller's included); results do not depend on it. */
-    val threads: Int = Runtime.getRuntime().availableProcessors().coerceIn(1, 8),
+    public val threads: Int = Runtime.getRuntime().availableProcessors().coerceIn(1, 8),
     /** Below this many robots one thread steps them all; from it on, the emulator measures serial and parallel stepping and uses the faster. */
-    val parallelFrom: Int = 4,
+    public val parallelFrom: Int = 4,
     /** The wall clock that paces [Speed.Realtime], in nanoseconds; tests put a clock of their own here. */
-    val wallClock: WallClock = WallClock.SYSTEM,
+    public val wallClock: WallClock = WallClock.SYSTEM,
 )
 
 /** A wall clock for [Speed.Realtime] pacing: the time now, and a way to wait. */
