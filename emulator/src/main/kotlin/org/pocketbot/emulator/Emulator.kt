@@ -105,16 +105,22 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     public fun robot(id: Int): RobotHandle = robots.firstOrNull { it.id == id } ?: throw NoSuchElementException("no robot $id")
 
     /**
-     * Adds a robot with [id] (default: next free, from 1) at [pose] (default: the world's next start pose) and
-     * boots its firmware at the current time.
+     * Adds a robot with [id] (default: next free, from 1) and boots its firmware at the current time.
+     *
+     * Without a [pose] the robot stands where no other robot or box is: at the first of the world's start poses
+     * that is free, else on the first free spot of a grid over the floor, off the tape, facing +x (see
+     * emulator/README.md, "Worlds"); an [IllegalStateException] says when the floor has no room left. A [pose] is
+     * taken as given: a robot placed on another is pushed apart from it in the next step.
      */
     public fun addRobot(id: Int? = null, pose: Pose? = null): RobotHandle = synchronized(lock) {
         // Ids are bytes on the wire (1..254): a fleet larger than that reuses them, as real robots would have to.
         val rid = id ?: (handles.size % 254 + 1)
         require(rid in 1..254) { "robot id $rid out of 1..254" }
         require(id == null || handles.none { it.id == rid }) { "robot id $rid exists" }
-        val start = pose ?: (world.starts.getOrNull(handles.size) ?: world.starts.firstOrNull())?.toPose()
-            ?: Pose(world.widthM / 2, world.heightM / 2, 0.0)
+        val start = pose ?: sim.freePlace(config.robotParams) ?: throw IllegalStateException(
+            "no room for another robot in world ${world.name} (${world.widthM} x ${world.heightM} m, " +
+                "${world.starts.size} start poses, ${handles.size} robots): give it a pose with addRobot(pose = ...)",
+        )
         val r = SimRobot(rid, handles.size, config.robotParams, sim, image, start, config.seed, config.noise)
         r.bootAt(nowTicks)
         sim.robots += r
