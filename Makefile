@@ -1,6 +1,9 @@
 # PocketBot top-level build: make drives the firmware (C) and Maven (every JVM module).
 #
-#   make test        everything CI runs: deps, protocol check, firmware tests, mvn verify
+#   make test        everything CI runs: deps, protocol check, firmware tests, every Maven module's tests (the
+#                    libraries then deployed to target/repository), then samples/outside built and run against them
+#   make publish     the libraries as a Maven repository folder: $(PUBLISH_REPO) (PUBLISH_REPO=/other/dir)
+#   make docs        the libraries' API docs (Dokka HTML): target/docs/index.html
 #   make run         the control panel with an embedded emulator fleet; without a display, HelloRobot and the
 #                    headless fleet demo ($(RUN_MAIN)) instead
 #   make cli         builds the `pocketbot` command line: cli/target/pocketbot
@@ -43,17 +46,23 @@ FUZZ_MODULE         ?= sdk/jvm
 
 WASM := firmware/build/wasm/pocketbot.wasm
 
+# The published libraries (and their parent POM and BOM), and the folder `make publish` deploys them to: a Maven
+# repository on disk, never ~/.m2 (install is skipped; the local repository is shared with other builds).
+LIBRARIES     := library,library/bom,sdk/protocol,sdk/core,sdk/jvm,emulator,emulator/simulated
+PUBLISH_REPO  ?= target/repository
+publish_to     = -Dmaven.install.skip=true -DaltDeploymentRepository=pocketbot::file://$(abspath $(1))
+
 # `make run` / `hello` / `emulator` start with plain `java -cp` from the classpath files Maven
 # writes at package time, and rebuild only when a JVM source, pom or the firmware wasm changed.
-JVM_INPUTS := $(shell find pom.xml .mvn sdk emulator examples desktop-app -name target -prune -o -type f \
+JVM_INPUTS := $(shell find pom.xml .mvn library sdk emulator examples desktop-app -name target -prune -o -type f \
                 \( -name '*.kt' -o -name '*.java' -o -name 'pom.xml' -o -name '*.json' \
                    -o -name 'jvm.config' -o -path '*/src/main/resources/*' \) -print 2>/dev/null)
 RUN_STAMP  := examples/target/classpath.txt
 PANEL_STAMP := desktop-app/target/classpath.txt
 cp_of       = $(1)/target/classes:$$(cat $(1)/target/classpath.txt)
 
-.PHONY: all deps firmware wasm protocol-check jvm test run hello push track emulator cli panel screenshots apk \
-        bench bench-emulator profile-emulator bench-sdk bench-desktop fuzz clean
+.PHONY: all deps firmware wasm protocol-check jvm test publish docs outside-sample run hello push track emulator cli \
+        panel screenshots apk bench bench-emulator profile-emulator bench-sdk bench-desktop fuzz clean
 
 all: jvm
 
@@ -78,7 +87,23 @@ test: deps
 	$(MAKE) --no-print-directory protocol-check
 	$(MAKE) -C firmware test
 	$(MAKE) -C firmware wasm
-	$(MAVEN) -fae verify
+	rm -rf target/repository
+	$(MAVEN) -fae deploy $(call publish_to,target/repository)
+	$(MAKE) --no-print-directory outside-sample PUBLISH_REPO=target/repository
+
+# The libraries without their tests (`make test` runs them, and publishes in the same Maven run).
+publish: wasm
+	$(MAVEN) deploy -pl $(LIBRARIES) -am -Dmaven.test.skip=true -Dpocketbot.jsgate.skip=true $(call publish_to,$(PUBLISH_REPO))
+	@echo "published to $(PUBLISH_REPO):"; cd $(PUBLISH_REPO) && find org -name '*.pom' -o -name '*.jar' | sort
+
+# A program outside the reactor (its own POM, no parent) built against $(PUBLISH_REPO) alone, plus Central.
+outside-sample:
+	bash samples/outside/build-and-run.sh $(abspath $(PUBLISH_REPO))
+
+# One site for all libraries (library/docs), without the per-library docs and jars `make publish` makes.
+docs: wasm
+	$(MAVEN) package -pl library/docs -am -Dmaven.test.skip=true -Dpocketbot.jsgate.skip=true -Dpocketbot.publish.skip=true
+	@echo "API reference: target/docs/index.html"
 
 # Packages examples and everything it needs (emulator, sdk); skips tests and the Kotlin/JS gate,
 # which `make test` covers.
@@ -187,4 +212,5 @@ fuzz: wasm
 
 clean:
 	$(MVN) $(MVN_FLAGS) clean
+	rm -rf samples/outside/target
 	-$(MAKE) -C firmware clean
