@@ -312,4 +312,4 @@ internal class SimWorld(val spec: World) {
 }
 
 /** Room left between a newly placed robot and any robot or box already there. */
-internal const val PLACE_CLEARANCE_M: Double = 0.01
+private const val PLACE_CLEARANCE_M: Double = 0.01

@@ -1,0 +1,28 @@
+package org.pocketbot.emulator.cli
+
+import java.io.File
+import java.util.concurrent.TimeUnit
+import kotlin.test.Test
+import kotlin.test.assertEquals
+import kotlin.test.assertTrue
+
+/** The emulator's command line as a user runs it: a process of its own. */
+class EmulatorCommandTest {
+    private fun emulator(vararg args: String): Pair<Int, String> {
+        val java = File(System.getProperty("java.home"), "bin/java").path
+        val cmd = listOf(java, "-XX:-DontCompileHugeMethods", "-cp", System.getProperty("java.class.path"), "org.pocketbot.emulator.cli.MainKt", *args)
+        val process = ProcessBuilder(cmd).redirectErrorStream(true).redirectInput(ProcessBuilder.Redirect.PIPE).start()
+        process.outputStream.close()
+        val output = process.inputStream.bufferedReader().readText()
+        assertTrue(process.waitFor(60, TimeUnit.SECONDS), "the emulator did not end: $output")
+        return process.exitValue() to output
+    }
+
+    @Test
+    fun `more robots than the world has room for is an error that says so, not a pile of robots`() {
+        val (code, output) = emulator("--robots", "40", "--world", "straight", "--port-base", "0", "--control-port", "-1")
+        assertEquals(1, code, output)
+        assertTrue("no room for another robot in world straight" in output, output)
+        assertTrue("Exception" !in output, "a stack trace instead of a message: $output")
+    }
+}
