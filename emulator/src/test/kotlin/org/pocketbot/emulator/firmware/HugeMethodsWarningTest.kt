@@ -20,9 +20,12 @@ class HugeMethodsWarningTest {
     private fun loadIn(vararg jvmFlags: String): String {
         val java = File(System.getProperty("java.home"), "bin/java").path
         val cmd = listOf(java, *jvmFlags, "-cp", System.getProperty("java.class.path"), LoadCompiledFirmware::class.java.name)
-        val process = ProcessBuilder(cmd).redirectErrorStream(true).start()
-        val output = process.inputStream.bufferedReader().readText()
-        assertTrue(process.waitFor(60, TimeUnit.SECONDS), "the probe JVM did not end")
+        val log = File.createTempFile("firmware-probe", ".txt").apply { deleteOnExit() }
+        val process = ProcessBuilder(cmd).redirectErrorStream(true).redirectOutput(log).start()
+        val ended = process.waitFor(60, TimeUnit.SECONDS)
+        if (!ended) process.destroyForcibly().waitFor()
+        val output = log.readText()
+        assertTrue(ended, "the probe JVM did not end: $output")
         assertEquals(0, process.exitValue(), output)
         return output
     }
