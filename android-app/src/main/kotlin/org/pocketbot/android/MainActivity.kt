@@ -86,7 +86,6 @@ class MainActivity : Activity(), BluetoothActions {
         val root = vertical(0, top, noticeBar(), content.apply { layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, 0, 1f) }, tabs).apply {
             setBackgroundColor(palette.BACKGROUND)
         }
-        drawEdgeToEdge()
         root.setOnApplyWindowInsetsListener { _, insets ->
             val (bars, keyboard) = barsAndKeyboard(insets)
             top.setPadding(bars[0] + dp(16), bars[1] + dp(10), bars[2] + dp(12), dp(10))
@@ -96,6 +95,7 @@ class MainActivity : Activity(), BluetoothActions {
             insets
         }
         setContentView(root)
+        drawEdgeToEdge()
         views.launch { combine(model.screen, model.session) { s, r -> s to r }.collect { (screen, session) -> show(screen, session) } }
         views.launch {
             model.session.collectLatest { session ->
