@@ -43,6 +43,7 @@ import org.pocketbot.android.ui.TOUCH_TARGET_DP
 import org.pocketbot.android.ui.button
 import org.pocketbot.android.ui.calibrationScreen
 import org.pocketbot.android.ui.dp
+import org.pocketbot.android.ui.heading
 import org.pocketbot.android.ui.driveScreen
 import org.pocketbot.android.ui.followScreen
 import org.pocketbot.android.ui.horizontal
@@ -225,19 +226,19 @@ class MainActivity : Activity(), BluetoothActions {
     /** App name, the robot's name, battery and link (greyed with their age when not live), and a stop button. */
     private fun topBar(): View {
         val p = palette
-        val title = text("PocketBot", 20f, p.BAR_TEXT, bold = true).apply { isAccessibilityHeading = true }
+        val title = text("PocketBot", 20f, p.BAR_TEXT, bold = true).apply { heading() }
         val robot = text("no robot connected", 14f, p.BAR_SOFT)
         val battery = text("", 14f, p.BAR_TEXT).apply { tag = "battery" }
         val link = text("", 14f, p.BAR_TEXT).apply { tag = "link" }
         val stop = button("STOP", ButtonStyle.DANGER) { model.session.value?.stopRobot() }.apply { contentDescription = "Stop the robot" }
-        val bar = horizontal(
+        // Large fonts (130 % and more) stack the robot's name and state under the title, so no word is cut.
+        val bar = if (resources.configuration.fontScale < 1.3f) horizontal(
             vertical(0, title, robot).apply { layoutParams = weight() },
             vertical(0, battery, link).apply { gravity = Gravity.END; setPadding(0, 0, dp(10), 0) },
             stop,
-        ).apply {
-            setBackgroundColor(p.BAR)
-            elevation = dp(4).toFloat()
-        }
+        ) else vertical(0, horizontal(title.apply { layoutParams = weight() }, stop), robot, battery, link)
+        bar.setBackgroundColor(p.BAR)
+        bar.elevation = dp(4).toFloat()
         views.launch {
             model.session.collectLatest { session ->
                 stop.visibility = if (session == null) View.GONE else View.VISIBLE
@@ -298,6 +299,7 @@ class MainActivity : Activity(), BluetoothActions {
                 gravity = Gravity.CENTER
                 isSingleLine = true
                 minHeight = dp(TOUCH_TARGET_DP)
+                minWidth = dp(TOUCH_TARGET_DP)
                 setPadding(dp(8), 0, dp(8), 0)
                 setOnClickListener { model.show(screen) }
                 layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.WRAP_CONTENT, ViewGroup.LayoutParams.WRAP_CONTENT, 1f)

@@ -69,9 +69,7 @@ class AppHarness(
 
     init {
         shadowOf(app).grantPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
-        // Robolectric 4.17's Bluetooth shadows need classes of API 34 (BluetoothDevice.BluetoothAddress): below it the
-        // app runs as on a phone without Bluetooth (the tests there reach the robot over the emulator's link).
-        app.bluetoothAccess = if (android.os.Build.VERSION.SDK_INT >= 34) BluetoothAccess(app) else BluetoothAccess(app, adapter = null)
+        app.bluetoothAccess = BluetoothAccess(app)
         model = AppModel(scope + crashes, app.bluetoothAccess, sources) { host, port -> EmulatorDiscoverer(host, port) }
         app.model = model
         app.connectionService = ConnectionService.Keeper(app, model) // as PocketBotApp does
@@ -92,15 +90,21 @@ class AppHarness(
     }
 
     /**
-     * The user presses Back, delivered as Android delivers it: a key event through the window's input stages (which on
-     * Android 13 and later hand it to the top OnBackInvokedCallback, before on to the Activity's onBackPressed).
+     * The user presses Back, delivered as Android delivers it. Android 13 and later (the app opts in to
+     * OnBackInvokedCallback) hand it to the window's top callback, as ViewRootImpl does for the Back key: the app's
+     * while it registered one, else the system's (on Android 12+ it moves the app to the background). Before, the key
+     * goes through the window to the Activity (onKeyUp, onBackPressed).
      */
     suspend fun pressBack() {
-        val viewRoot = root.viewRootImpl ?: throw AssertionError("the window is not shown")
-        for (action in listOf(KeyEvent.ACTION_DOWN, KeyEvent.ACTION_UP)) {
-            val now = android.os.SystemClock.uptimeMillis()
-            viewRoot.dispatchInputEvent(KeyEvent(now, now, action, KeyEvent.KEYCODE_BACK, 0))
-            idle()
+        val dispatcher = if (android.os.Build.VERSION.SDK_INT >= 33) root.viewRootImpl?.onBackInvokedDispatcher else null
+        if (dispatcher != null && dispatcher.isOnBackInvokedCallbackEnabled) {
+            val top = dispatcher.topCallback ?: throw AssertionError("no back callback at all")
+            top.onBackInvoked()
+        } else {
+            for (action in listOf(KeyEvent.ACTION_DOWN, KeyEvent.ACTION_UP)) {
+                val now = android.os.SystemClock.uptimeMillis()
+                root.dispatchKeyEvent(KeyEvent(now, now, action, KeyEvent.KEYCODE_BACK, 0))
+            }
         }
         run(20.milliseconds)
     }

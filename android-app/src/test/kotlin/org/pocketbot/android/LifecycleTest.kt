@@ -107,7 +107,7 @@ class LifecycleTest {
         until("disconnected") { model.session.value == null }
         val service = Robolectric.buildService(ConnectionService::class.java, intent).create().startCommand(0, 1).get()
         run(50.milliseconds)
-        assertNotNull(shadowOf(service).lastForegroundNotification, "it went to the foreground first, as Android demands")
+        assertEquals(ServiceInfo.FOREGROUND_SERVICE_TYPE_CONNECTED_DEVICE, service.foregroundServiceType, "it went to the foreground first, as Android demands")
         assertTrue(shadowOf(service).isStoppedBySelf && shadowOf(service).isForegroundStopped, "then ended itself")
         assertNull(shadowOf(app).nextStoppedService)
     }
@@ -130,7 +130,6 @@ class LifecycleTest {
     }
 
     @Test
-    @Config(sdk = [31, 35])
     fun theNotificationIsAskedForOnAndroid13AndItsStopButtonStopsTheRobot() = withApp {
         connectRobot()
         val asked = shadowOf(activity).lastRequestedPermission
@@ -183,10 +182,9 @@ class LifecycleTest {
 
     /**
      * Android 12 and later move a launcher activity to the background on Back instead of finishing it: Back must stop
-     * the robot itself. Pressed as Android delivers it (API 31: onBackPressed; API 35: the OnBackInvokedCallback).
+     * the robot itself. Pressed as Android 13+ delivers it, to the window's top OnBackInvokedCallback.
      */
     @Test
-    @Config(sdk = [31, 35])
     fun backWithARobotDrivingStopsItAndAsksToLeave() = withApp {
         connectRobot()
         val session = model.session.value!!

@@ -21,11 +21,8 @@ import org.pocketbot.sdk.transport.RobotDevice
  * The phone's Bluetooth as the app sees it: whether it exists, whether the user granted the permissions it needs,
  * whether it is on; kept current by the adapter's state broadcasts and by [refresh] (after a permission answer).
  */
-public class BluetoothAccess(
-    private val context: Context,
-    /** The phone's Bluetooth adapter; null on a phone without Bluetooth. */
-    private val adapter: BluetoothAdapter? = context.getSystemService(BluetoothManager::class.java)?.adapter,
-) : BluetoothPort {
+public class BluetoothAccess(private val context: Context) : BluetoothPort {
+    private val adapter: BluetoothAdapter? = context.getSystemService(BluetoothManager::class.java)?.adapter
     private val _status = MutableStateFlow(BluetoothStatus.READY)
     private var refused = false
     private var blocked = false

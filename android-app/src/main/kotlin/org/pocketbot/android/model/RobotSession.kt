@@ -136,7 +136,7 @@ class RobotSession(
                 val age = (ticks - heardAt) * FRESHNESS_TICK_MS
                 val link = robot.connection.value
                 _freshness.value = when {
-                    link != ConnectionState.Connected -> Freshness(false, age, "the link is ${status.value.linkText}")
+                    link != ConnectionState.Connected -> Freshness(false, age, status.value.linkText)
                     age > maxOf(STALE_AFTER_MS, 3L * robot.settings.sync.periodMs.value) -> Freshness(false, age, "the robot stopped reporting")
                     else -> Freshness(true, age, null)
                 }

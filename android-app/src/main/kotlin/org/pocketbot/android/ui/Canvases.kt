@@ -175,7 +175,7 @@ class JoystickCanvas(context: Context) : View(context) {
     var active: Boolean = false
         set(value) {
             field = value
-            stateDescription = if (value) "driving" else "stopped"
+            state(if (value) "driving" else "stopped")
             invalidate()
         }
 
@@ -195,7 +195,7 @@ class JoystickCanvas(context: Context) : View(context) {
 
     init {
         contentDescription = "Joystick"
-        stateDescription = "stopped"
+        state("stopped")
     }
 
     override fun onMeasure(widthMeasureSpec: Int, heightMeasureSpec: Int) {

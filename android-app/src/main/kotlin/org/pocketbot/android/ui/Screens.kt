@@ -51,8 +51,8 @@ private fun Context.sliderRow(title: String, maxMps: Double, onRelease: (Double)
     val status = text("", 12f, palette.TEXT_SOFT)
     val bar = SeekBar(this).apply {
         max = (maxMps * 100).toInt()
-        minimumHeight = dp(TOUCH_TARGET_DP)
         contentDescription = title
+        layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, dp(TOUCH_TARGET_DP))
     }
     bar.setOnSeekBarChangeListener(object : SeekBar.OnSeekBarChangeListener {
         override fun onProgressChanged(seekBar: SeekBar, progress: Int, fromUser: Boolean) {
@@ -326,7 +326,7 @@ fun driveScreen(context: Context, session: RobotSession, scope: CoroutineScope):
     val slider = SeekBar(this).apply {
         max = ((JoystickModel.MAX_SPEED_MPS - JoystickModel.MIN_SPEED_MPS) * 100).toInt()
         progress = ((model.state.value.maxSpeedMps - JoystickModel.MIN_SPEED_MPS) * 100).toInt()
-        minimumHeight = dp(TOUCH_TARGET_DP)
+        layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, dp(TOUCH_TARGET_DP))
         contentDescription = "Top speed"
         setOnSeekBarChangeListener(object : SeekBar.OnSeekBarChangeListener {
             override fun onProgressChanged(seekBar: SeekBar, progress: Int, fromUser: Boolean) {

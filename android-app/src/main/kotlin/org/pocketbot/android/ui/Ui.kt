@@ -102,7 +102,7 @@ fun Context.card(title: String?, vararg children: View): LinearLayout = vertical
     if (title != null) addView(text(title, 13f, palette.TEXT_SOFT, bold = true).apply {
         letterSpacing = 0.06f
         setPadding(0, 0, 0, dp(8))
-        isAccessibilityHeading = true
+        heading()
     })
     children.forEach { addView(it) }
     layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, ViewGroup.LayoutParams.WRAP_CONTENT).apply {
@@ -133,6 +133,16 @@ fun Context.button(label: String, style: ButtonStyle = ButtonStyle.FILLED, onCli
     setTextColor(fg)
     background = RippleDrawable(ColorStateList.valueOf(Color.argb(60, 0, 0, 0)), rounded(context, fill, 24, stroke), null)
     setOnClickListener { onClick() }
+}
+
+/** Marks [this] as a heading for screen readers (Android 9 on; before, TalkBack reads it as text). */
+fun View.heading() {
+    if (android.os.Build.VERSION.SDK_INT >= android.os.Build.VERSION_CODES.P) isAccessibilityHeading = true
+}
+
+/** What a screen reader says of [this]'s state (Android 11 on; before, the content description must tell it). */
+fun View.state(description: String) {
+    if (android.os.Build.VERSION.SDK_INT >= android.os.Build.VERSION_CODES.R) stateDescription = description
 }
 
 /** Enables or disables [this]; a disabled control is faded (and, as Android says, not operable). */
