@@ -14,8 +14,9 @@
  *   PB4..PB7 and PA3. Slow sensors (battery, current, accelerometer, temperature) on ADCB, converted in
  *   the background round robin; the colour sensor (TCS3472) over TWIC, read by an interrupt-driven
  *   state machine.
- * - IR: messages as 2400 Bd UART frames on a 38 kHz carrier (TCD1 on PD5, power = carrier duty): TX from
- *   USARTD0 with the LED chosen by PC4..PC7; front receiver on USARTD0 RX (PD2), rear on USARTD1 RX (PD6).
+ * - IR: messages as 2400 Bd UART frames of 9 bits (a byte and its line code bit) on a 38 kHz carrier (TCD1 on
+ *   PD5, power = carrier duty): TX from USARTD0 with the LED chosen by PC4..PC7; front receiver on USARTD0 RX
+ *   (PD2), rear on USARTD1 RX (PD6).
  * - EEPROM through the NVM controller, one page write at a time; LEDs on PF0..PF2.
  */
 #include <avr/interrupt.h>
@@ -104,6 +105,7 @@ static volatile uint16_t sched_hi;
 
 static void sched_timer_init(void)
 {
+    sched_hi = 0;
     TCC0.CTRLA = TC_CLKSEL_OFF_gc;
     TCC0.CTRLB = TC_WGMODE_NORMAL_gc;
     TCC0.PER = 0xFFFF;
@@ -134,18 +136,21 @@ uint32_t hal_micros(void)
     return sched_ticks() << 1;
 }
 
-static volatile uint16_t *const sched_cc[4] = {&TCC0.CCA, &TCC0.CCB, &TCC0.CCC, &TCC0.CCD};
+static register16_t *const sched_cc[4] = {&TCC0.CCA, &TCC0.CCB, &TCC0.CCC, &TCC0.CCD};
 
 void hal_sched_arm(uint8_t ch, uint32_t at_us)
 {
     if (ch >= HAL_SCHED_CHANNELS)
         return;
     uint8_t s = hal_irq_save();
-    uint32_t at = at_us >> 1;
-    int32_t ahead = (int32_t)(at - sched_ticks());
-    if (ahead < 4) /* already due: fire in a few microseconds rather than after a wrap */
-        at = sched_ticks() + 4;
-    *sched_cc[ch] = (uint16_t)at;
+    uint32_t now = sched_ticks();
+    /* How far ahead, compared in microseconds as hal_micros() counts them (mod 2^32, so across its wrap), then in
+     * timer ticks: the timer's own 32-bit count would wrap at another time (after 143 minutes). */
+    int32_t ahead_us = (int32_t)(at_us - (now << 1));
+    uint16_t ticks = ahead_us < 8 ? 4u /* already due: fire in a few microseconds rather than after a wrap */
+                     : ahead_us >= 2 * 0xFFF0l ? 0xFFF0u
+                                              : (uint16_t)((ahead_us + 1) >> 1);
+    *sched_cc[ch] = (uint16_t)(now + ticks);
     TCC0.INTFLAGS = (uint8_t)(TC0_CCAIF_bm << ch);
     uint8_t shift = (uint8_t)(2 * ch);
     TCC0.INTCTRLB = (uint8_t)((TCC0.INTCTRLB & ~(3u << shift)) | (TC_CCAINTLVL_MED_gc << shift));
@@ -178,6 +183,7 @@ static volatile uint16_t capture_hi;
 
 static void encoder_init_hw(void)
 {
+    capture_hi = 0;
     /* Comparators against a scaled VCC threshold, high-speed mode, hysteresis against stripe noise. */
     ACA.CTRLB = 32; /* scaler: VCC * 33/64 */
     ACA.AC0MUXCTRL = AC_MUXPOS_PIN0_gc | AC_MUXNEG_SCALER_gc;
@@ -487,10 +493,40 @@ ISR(TWIC_TWIM_vect)
 /* ---- IR: USARTD0 TX on a 38 kHz carrier, receivers on USARTD0 / USARTD1 RX ------------------ */
 
 #define IR_SYNC 0xA5u
-#define IR_FRAME_MAX (5u + HAL_IR_PAYLOAD_MAX)
+#define IR_FRAME_MAX (HAL_IR_MESSAGE_BYTES + HAL_IR_PAYLOAD_MAX)
 #define CARRIER_PER BOARD_IR_CARRIER_PER
 
-static uint8_t ir_tx_buf[IR_FRAME_MAX];
+/* The line code. The LEDs carry the carrier while TX is low, for the start bit and every 0 bit, so a byte with a
+ * long run of 0 bits is a long burst of carrier: 0x00 alone would be 9 bits, 3.75 ms, where common IR receivers
+ * take bursts up to about 70 carrier cycles (1.8 ms) before their gain control treats them as noise. Frames carry
+ * 9 data bits: a byte goes out as it is (code bit 0) when its frame has no burst over 4 bits (63 cycles), else
+ * rotated left by one and masked, with the code bit set, which has none either (tests/xmega checks all 256). */
+#define IR_CODE_MASK 0x29u
+
+/* True when a 9-bit frame (start bit, 9 data bits LSB first, stop bit) has no run of more than 4 zero bits. */
+static bool ir_bursts_ok(uint16_t frame)
+{
+    uint16_t z = (uint16_t)(~((frame << 1) | 0x400u) & 0x7FFu); /* the frame's 0 bits as 1s */
+    return (z & (z >> 1) & (z >> 2) & (z >> 3) & (z >> 4)) == 0;
+}
+
+static uint16_t ir_encode(uint8_t b)
+{
+    if (ir_bursts_ok(b))
+        return b;
+    return (uint16_t)(0x100u | (uint8_t)(((b << 1) | (b >> 7)) ^ IR_CODE_MASK));
+}
+
+static uint8_t ir_decode(uint16_t f)
+{
+    if (!(f & 0x100u))
+        return (uint8_t)f;
+    uint8_t r = (uint8_t)(f ^ IR_CODE_MASK);
+    return (uint8_t)((r >> 1) | (r << 7));
+}
+
+static uint16_t ir_tx_buf[IR_FRAME_MAX];
+/* ir_tx_len is non-zero from hal_ir_send() until the last frame's stop bit has left (its TXC). */
 static volatile uint8_t ir_tx_len, ir_tx_pos;
 
 typedef struct {
@@ -512,57 +548,76 @@ static uint8_t crc8(const uint8_t *p, uint8_t n)
 
 static void ir_init_hw(void)
 {
+    ir_tx_len = ir_tx_pos = 0;
+    memset(ir_rx, 0, sizeof ir_rx);
     PORTC.DIRSET = 0xF0; /* LED selects */
     PORTD.DIRSET = PIN3_bm | PIN5_bm;
     TCD1.PER = CARRIER_PER;
     TCD1.CCB = 0;
     TCD1.CTRLB = TC1_CCBEN_bm | TC_WGMODE_SS_gc;
     TCD1.CTRLA = TC_CLKSEL_DIV1_gc;
-    /* 2400 Bd: BSEL 832, BSCALE 0 */
+    /* 2400 Bd: BSEL 832, BSCALE 0; 9-bit frames (the line code) */
     USARTD0.BAUDCTRLA = (uint8_t)BOARD_IR_BSEL;
     USARTD0.BAUDCTRLB = (uint8_t)(BOARD_IR_BSEL >> 8);
     USARTD1.BAUDCTRLA = (uint8_t)BOARD_IR_BSEL;
     USARTD1.BAUDCTRLB = (uint8_t)(BOARD_IR_BSEL >> 8);
-    USARTD0.CTRLC = USART_CHSIZE_8BIT_gc;
-    USARTD1.CTRLC = USART_CHSIZE_8BIT_gc;
+    USARTD0.CTRLC = USART_CHSIZE_9BIT_gc;
+    USARTD1.CTRLC = USART_CHSIZE_9BIT_gc;
     USARTD0.CTRLA = USART_RXCINTLVL_LO_gc | USART_TXCINTLVL_LO_gc;
     USARTD1.CTRLA = USART_RXCINTLVL_LO_gc;
     USARTD0.CTRLB = USART_RXEN_bm | USART_TXEN_bm;
     USARTD1.CTRLB = USART_RXEN_bm;
 }
 
+static void ir_send_frame(uint16_t f)
+{
+    USARTD0.CTRLB = (uint8_t)(USART_RXEN_bm | USART_TXEN_bm | ((f & 0x100u) ? USART_TXB8_bm : 0u));
+    USARTD0.DATA = (uint8_t)f;
+}
+
 bool hal_ir_send(const hal_ir_msg_t *m)
 {
-    if (ir_tx_pos < ir_tx_len)
+    if (ir_tx_len)
         return false;
     uint8_t len = m->len > HAL_IR_PAYLOAD_MAX ? HAL_IR_PAYLOAD_MAX : m->len;
-    ir_tx_buf[0] = IR_SYNC;
-    ir_tx_buf[1] = m->sender_id;
-    ir_tx_buf[2] = (uint8_t)((m->led << 4) | len);
-    ir_tx_buf[3] = m->power;
-    memcpy(ir_tx_buf + 4, m->data, len);
-    ir_tx_buf[4 + len] = crc8(ir_tx_buf + 1, (uint8_t)(3 + len));
+    uint8_t raw[IR_FRAME_MAX];
+    raw[0] = IR_SYNC;
+    raw[1] = m->sender_id;
+    raw[2] = (uint8_t)((m->led << 4) | len);
+    raw[3] = m->power;
+    memcpy(raw + 4, m->data, len);
+    raw[4 + len] = crc8(raw + 1, (uint8_t)(3 + len));
+    for (uint8_t i = 0; i < 5 + len; i++)
+        ir_tx_buf[i] = ir_encode(raw[i]);
+    /* The LEDs are dark while TX idles (high): the new LED and carrier duty take effect at once, from the first
+     * start bit (the duty's buffer register would wait for the carrier's next period). */
     PORTC.OUT = (uint8_t)((PORTC.OUT & 0x0F) | (0x10u << (m->led & 3u)));
-    TCD1.CCBBUF = (uint16_t)((uint32_t)CARRIER_PER / 2u * (m->power > 100u ? 100u : (uint16_t)m->power) / 100u);
+    TCD1.CCB = (uint16_t)((uint32_t)CARRIER_PER / 2u * (m->power > 100u ? 100u : (uint16_t)m->power) / 100u);
     ir_tx_len = (uint8_t)(5 + len);
     ir_tx_pos = 1;
-    USARTD0.DATA = ir_tx_buf[0];
+    ir_send_frame(ir_tx_buf[0]);
     return true;
 }
 
 ISR(USARTD0_TXC_vect)
 {
     if (ir_tx_pos < ir_tx_len) {
-        USARTD0.DATA = ir_tx_buf[ir_tx_pos++];
-    } else {
-        PORTC.OUTCLR = 0xF0; /* all LEDs off */
+        ir_send_frame(ir_tx_buf[ir_tx_pos++]);
+    } else { /* the last stop bit has left: LEDs off, the transmitter is free */
+        PORTC.OUTCLR = 0xF0;
         ir_tx_len = ir_tx_pos = 0;
     }
 }
 
-static void ir_byte(uint8_t side, uint8_t b)
+/* A frame heard by receiver `side`: `status` read before `data`, as the USART requires. */
+static void ir_frame(uint8_t side, uint8_t status, uint8_t data)
 {
     ir_rx_t *r = &ir_rx[side];
+    if (status & (USART_FERR_bm | USART_BUFOVF_bm)) { /* noise, a collision or a lost frame: the message is lost */
+        r->pos = 0;
+        return;
+    }
+    uint8_t b = ir_decode((uint16_t)(((status & USART_RXB8_bm) ? 0x100u : 0u) | data));
     if (r->pos == 0 && b != IR_SYNC)
         return;
     r->buf[r->pos++] = b;
@@ -589,12 +644,14 @@ static void ir_byte(uint8_t side, uint8_t b)
 
 ISR(USARTD0_RXC_vect)
 {
-    ir_byte(0, USARTD0.DATA);
+    uint8_t status = USARTD0.STATUS;
+    ir_frame(0, status, USARTD0.DATA);
 }
 
 ISR(USARTD1_RXC_vect)
 {
-    ir_byte(1, USARTD1.DATA);
+    uint8_t status = USARTD1.STATUS;
+    ir_frame(1, status, USARTD1.DATA);
 }
 
 /* ---- EEPROM through the NVM controller ------------------------------------------------------ */
@@ -606,7 +663,7 @@ static void nvm_exec(void)
 
 void hal_eeprom_read(uint16_t addr, void *dst, uint16_t len)
 {
-    uint8_t *d = dst;
+    uint8_t *d = (uint8_t *)dst;
     for (uint16_t i = 0; i < len; i++) {
         uint16_t a = (uint16_t)(addr + i);
         if (a >= HAL_EEPROM_SIZE) {
@@ -630,7 +687,7 @@ bool hal_eeprom_busy(void)
 
 void hal_eeprom_write_page(uint16_t addr, const void *src, uint8_t len)
 {
-    const uint8_t *s = src;
+    const uint8_t *s = (const uint8_t *)src;
     if (hal_eeprom_busy() || (uint32_t)addr + len > HAL_EEPROM_SIZE)
         return;
     NVM.CMD = NVM_CMD_ERASE_EEPROM_BUFFER_gc;
