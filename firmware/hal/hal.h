@@ -116,7 +116,8 @@ enum hal_sensor {
     HAL_SENSOR_COUNT
 };
 /** \return the latest value of a sensor in its physical unit (never blocks: conversions run in the
- *  background). */
+ *  background); colour channels 0..255 of full scale, or -1 while the colour sensor gives no reading (it does not
+ *  answer). */
 int32_t hal_sensor_read(uint8_t sensor);
 
 /* ---- IR proximity --------------------------------------------------------------------------- */

@@ -307,7 +307,6 @@ ISR(USARTC0_DRE_vect)
 static volatile uint16_t line_res[HAL_LINE_DETECTORS];
 static volatile int16_t slow_raw[6];
 static volatile uint8_t slow_index;
-static volatile uint8_t colour[4];
 
 /* Slow analog inputs on ADCB: battery divider, current shunt amplifier, accelerometer x, y, z. */
 static const uint8_t slow_mux[5] = {ADC_CH_MUXPOS_PIN0_gc, ADC_CH_MUXPOS_PIN1_gc, ADC_CH_MUXPOS_PIN2_gc,
@@ -390,14 +389,21 @@ ISR(ADCB_CH0_vect)
     ADCB.CH0.CTRL |= ADC_CH_START_bm;
 }
 
+static void colour_poll(void);
+static volatile uint8_t colour[4]; /* clear, red, green, blue: 0..255 of the integration's full scale */
+static volatile uint8_t colour_valid;
+
 int32_t hal_sensor_read(uint8_t sensor)
 {
     int32_t raw;
+    if (sensor >= HAL_SENSOR_COLOUR_R && sensor < HAL_SENSOR_COUNT) {
+        colour_poll();
+        uint8_t c = colour[(sensor - HAL_SENSOR_COLOUR_R + 1u) & 3u]; /* the sensor's order: clear, red, green, blue */
+        return colour_valid ? c : -1;
+    }
     uint8_t s = hal_irq_save();
     if (sensor <= HAL_SENSOR_ACCEL_Z_MG)
         raw = slow_raw[sensor == HAL_SENSOR_MCU_TEMP_DC ? 5 : sensor < 2 ? sensor : sensor - 1];
-    else if (sensor < HAL_SENSOR_COUNT)
-        raw = colour[sensor - HAL_SENSOR_COLOUR_R];
     else
         raw = 0;
     hal_irq_restore(s);
@@ -418,76 +424,134 @@ int32_t hal_sensor_read(uint8_t sensor)
     }
 }
 
-/* ---- colour sensor: TCS3472 on TWIC, read continuously by the TWI interrupt ----------------- */
+/* ---- colour sensor: TCS3472 on TWIC, configured, then read once per integration -------------- */
 
 #define TCS_ADDR BOARD_TCS3472_ADDR
 #define TCS_CMD 0x80u
 #define TCS_AUTOINC 0x20u
+#define TCS_ENABLE 0x00u /* then ATIME at 0x01 */
+#define TCS_CONTROL 0x0Fu
 #define TCS_CDATAL 0x14u
+#define TCS_PON_AEN 0x03u
+/* One integration: (256 - ATIME) cycles of 2.4 ms, counts up to 1024 a cycle; one read per integration. */
+#define TCS_CYCLES (256u - BOARD_TCS_ATIME)
+#define TCS_INTEGRATION_US (TCS_CYCLES * 2400ul)
+#define TCS_FULL_SCALE (TCS_CYCLES * 1024ul)
+/* After a NACK or a bus error the sensor is configured again this much later (it may have been unplugged). */
+#define TCS_RETRY_US 100000ul
 
+/* The transfer in progress, one step per TWI interrupt. */
+enum {
+    TWI_IDLE,
+    CONFIG_ENABLE, CONFIG_PON, CONFIG_ATIME, CONFIG_STOP, CONFIG_CONTROL, CONFIG_GAIN, CONFIG_DONE,
+    READ_POINTER, READ_RESTART, READ_BYTES /* .. READ_BYTES + 7 */
+};
 static volatile uint8_t twi_step;
 static uint8_t twi_buf[8];
+static uint8_t tcs_configured;
+static uint32_t twi_next_us;         /* when the main loop may start the next transfer */
 
 static void twi_init_hw(void)
 {
+    twi_step = TWI_IDLE;
+    colour_valid = 0;
+    tcs_configured = 0;
     TWIC.MASTER.BAUD = 155; /* 100 kHz from 32 MHz */
     TWIC.MASTER.CTRLA = TWI_MASTER_INTLVL_LO_gc | TWI_MASTER_RIEN_bm | TWI_MASTER_WIEN_bm | TWI_MASTER_ENABLE_bm;
     TWIC.MASTER.STATUS = TWI_MASTER_BUSSTATE_IDLE_gc;
-    /* Power on and enable the RGBC integration, then start the read cycle. */
-    twi_step = 0;
-    TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+    twi_next_us = 0;
+}
+
+/* A NACK, a lost arbitration or a bus error: let go of the bus, forget the colour, configure again later. */
+static void twi_fail(void)
+{
+    TWIC.MASTER.CTRLC = TWI_MASTER_CMD_STOP_gc;
+    TWIC.MASTER.STATUS = TWI_MASTER_BUSSTATE_IDLE_gc;
+    twi_step = TWI_IDLE;
+    colour_valid = 0;
+    tcs_configured = 0;
+    twi_next_us = hal_micros() + TCS_RETRY_US;
+}
+
+/* Called from the main loop (hal_sensor_read()): starts the next transfer when it is due. */
+static void colour_poll(void)
+{
+    uint8_t s = hal_irq_save();
+    if (twi_step == TWI_IDLE && (int32_t)(hal_micros() - twi_next_us) >= 0) {
+        twi_step = tcs_configured ? READ_POINTER : CONFIG_ENABLE;
+        twi_next_us = hal_micros() + TCS_INTEGRATION_US;
+        TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+    }
+    hal_irq_restore(s);
+}
+
+/* 16-bit counts to 0..255 of full scale. */
+static uint8_t colour_byte(uint8_t lo, uint8_t hi)
+{
+    uint32_t v = ((uint32_t)((uint16_t)hi << 8 | lo) * 255u) / TCS_FULL_SCALE;
+    return (uint8_t)(v > 255u ? 255u : v);
 }
 
 ISR(TWIC_TWIM_vect)
 {
     uint8_t status = TWIC.MASTER.STATUS;
-    if (status & (TWI_MASTER_ARBLOST_bm | TWI_MASTER_BUSERR_bm)) {
-        TWIC.MASTER.STATUS = TWI_MASTER_BUSSTATE_IDLE_gc;
-        twi_step = 3;
-        TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+    if ((status & (TWI_MASTER_ARBLOST_bm | TWI_MASTER_BUSERR_bm)) ||
+        ((status & TWI_MASTER_WIF_bm) && (status & TWI_MASTER_RXACK_bm))) {
+        twi_fail();
         return;
     }
-    switch (twi_step) {
-    case 0: /* enable register := PON | AEN */
-        TWIC.MASTER.DATA = TCS_CMD | 0x00u;
-        twi_step = 1;
+    uint8_t step = twi_step;
+    switch (step) {
+    case CONFIG_ENABLE: /* ENABLE := PON | AEN, ATIME (auto-increment), then CONTROL := gain */
+        TWIC.MASTER.DATA = TCS_CMD | TCS_AUTOINC | TCS_ENABLE;
         break;
-    case 1:
-        TWIC.MASTER.DATA = 0x03u;
-        twi_step = 2;
+    case CONFIG_PON:
+        TWIC.MASTER.DATA = TCS_PON_AEN;
         break;
-    case 2:
+    case CONFIG_ATIME:
+        TWIC.MASTER.DATA = BOARD_TCS_ATIME;
+        break;
+    case CONFIG_STOP:
         TWIC.MASTER.CTRLC = TWI_MASTER_CMD_STOP_gc;
-        twi_step = 3;
-        TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+        TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1); /* the next transfer starts after the STOP */
         break;
-    case 3: /* point at CDATAL with auto-increment, then read 8 bytes */
+    case CONFIG_CONTROL:
+        TWIC.MASTER.DATA = TCS_CMD | TCS_CONTROL;
+        break;
+    case CONFIG_GAIN:
+        TWIC.MASTER.DATA = BOARD_TCS_AGAIN;
+        break;
+    case CONFIG_DONE:
+        TWIC.MASTER.CTRLC = TWI_MASTER_CMD_STOP_gc;
+        tcs_configured = 1;
+        twi_step = TWI_IDLE; /* the first integration ends TCS_INTEGRATION_US after the warm-up: poll then */
+        return;
+    case READ_POINTER: /* point at CDATAL with auto-increment, then read clear, red, green, blue (8 bytes) */
         TWIC.MASTER.DATA = TCS_CMD | TCS_AUTOINC | TCS_CDATAL;
-        twi_step = 4;
         break;
-    case 4:
-        twi_step = 5;
+    case READ_RESTART:
         TWIC.MASTER.ADDR = (uint8_t)((TCS_ADDR << 1) | 1u);
         break;
     default: {
-        uint8_t k = (uint8_t)(twi_step - 5u);
+        uint8_t k = (uint8_t)(step - READ_BYTES);
+        if (k > 7u) {
+            twi_fail();
+            return;
+        }
         twi_buf[k] = TWIC.MASTER.DATA;
         if (k < 7u) {
-            twi_step++;
             TWIC.MASTER.CTRLC = TWI_MASTER_CMD_RECVTRANS_gc;
-        } else {
-            TWIC.MASTER.CTRLC = TWI_MASTER_ACKACT_bm | TWI_MASTER_CMD_STOP_gc;
-            /* 16-bit clear, red, green, blue counts to 0..255 (high bytes) */
-            colour[3] = twi_buf[1];
-            colour[0] = twi_buf[3];
-            colour[1] = twi_buf[5];
-            colour[2] = twi_buf[7];
-            twi_step = 3;
-            TWIC.MASTER.ADDR = (uint8_t)(TCS_ADDR << 1);
+            break;
         }
-        break;
+        TWIC.MASTER.CTRLC = TWI_MASTER_ACKACT_bm | TWI_MASTER_CMD_STOP_gc;
+        for (uint8_t c = 0; c < 4; c++)
+            colour[c] = colour_byte(twi_buf[2 * c], twi_buf[2 * c + 1]);
+        colour_valid = 1;
+        twi_step = TWI_IDLE;
+        return;
     }
     }
+    twi_step = (uint8_t)(step + 1u);
 }
 
 /* ---- IR: USARTD0 TX on a 38 kHz carrier, receivers on USARTD0 / USARTD1 RX ------------------ */

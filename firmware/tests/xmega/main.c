@@ -11,6 +11,7 @@ static const struct {
 } suites[] = {
     {"time", suite_xm_time},
     {"ir", suite_xm_ir},
+    {"colour", suite_xm_colour},
 };
 
 int main(int argc, char **argv)

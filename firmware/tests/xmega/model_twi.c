@@ -357,6 +357,14 @@ void xm_tcs_light(uint16_t clear, uint16_t red, uint16_t green, uint16_t blue)
 void xm_tcs_present(bool present)
 {
     tcs.present = present;
+    if (!present) { /* unplugged: powered off, its registers back to their reset values */
+        memset(tcs.r, 0, sizeof tcs.r);
+        tcs.r[0x01] = 0xFF;
+        tcs.r[0x03] = 0xFF;
+        tcs.r[0x12] = 0x44;
+        tcs.cycle_end = XM_NEVER;
+        tcs.integrating = false;
+    }
 }
 
 uint8_t xm_tcs_reg(uint8_t reg)

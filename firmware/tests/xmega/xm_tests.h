@@ -6,5 +6,6 @@
 
 void suite_xm_time(void);
 void suite_xm_ir(void);
+void suite_xm_colour(void);
 
 #endif

@@ -149,7 +149,7 @@ void xm_temperature_set(double celsius);
 /* ---- TWI: the TCS3472 colour sensor at 0x29 ---- */
 /** Light on the sensor: counts per 2.4 ms integration cycle at gain 1x, per channel (clear, red, green, blue). */
 void xm_tcs_light(uint16_t clear, uint16_t red, uint16_t green, uint16_t blue);
-/** Whether the sensor answers its address (false: unplugged, every transfer is NACKed). */
+/** Whether the sensor answers its address (false: unplugged: every transfer is NACKed, and its registers are lost). */
 void xm_tcs_present(bool present);
 uint8_t xm_tcs_reg(uint8_t reg);
 /** Bus transactions to the sensor: register writes and reads in order. */
