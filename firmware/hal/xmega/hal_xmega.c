@@ -7,7 +7,7 @@
  *   16-bit count extended by the overflow interrupt.
  * - Encoders: the analog comparators ACA.AC0 (left) and AC1 (right) square the reflective sensors'
  *   signals; their output toggles reach TCD0 (clk/8, 4 MHz) through event channels 0 and 1 as input
- *   captures on CCA and CCB. The capture interrupt only extends the timestamp and hands it on.
+ *   captures on CCA and CCB. The capture interrupt only extends the timestamp to 32 bits and hands it on.
  * - Motors: TCE0 single-slope PWM at 20 kHz on PE0..PE3 (left IN1/IN2, right IN1/IN2 of the H-bridges).
  * - Host link: USARTC0 (PC2 RX, PC3 TX) at 115200 Bd to the Bluetooth module, RXC and DRE interrupts.
  * - Line sensor: ADCA, detectors on PA4..PA7 converted in one sweep of channels 0..3; emitters on
@@ -184,16 +184,18 @@ static volatile uint16_t capture_hi;
 static void encoder_init_hw(void)
 {
     capture_hi = 0;
-    /* Comparators against a scaled VCC threshold, high-speed mode, hysteresis against stripe noise. */
+    /* Comparators against a scaled VCC threshold, high-speed mode, the large hysteresis and the event system's
+     * longest filter (8 samples, 250 ns) against stripe noise; chatter that gets through anyway is rejected by the
+     * encoder driver (ENCODER_MIN_EDGE_US). */
     ACA.CTRLB = 32; /* scaler: VCC * 33/64 */
     ACA.AC0MUXCTRL = AC_MUXPOS_PIN0_gc | AC_MUXNEG_SCALER_gc;
     ACA.AC1MUXCTRL = AC_MUXPOS_PIN1_gc | AC_MUXNEG_SCALER_gc;
-    ACA.AC0CTRL = AC_INTMODE_BOTHEDGES_gc | AC_HSMODE_bm | AC_HYSMODE_SMALL_gc | AC_ENABLE_bm;
-    ACA.AC1CTRL = AC_INTMODE_BOTHEDGES_gc | AC_HSMODE_bm | AC_HYSMODE_SMALL_gc | AC_ENABLE_bm;
+    ACA.AC0CTRL = AC_INTMODE_BOTHEDGES_gc | AC_HSMODE_bm | AC_HYSMODE_LARGE_gc | AC_ENABLE_bm;
+    ACA.AC1CTRL = AC_INTMODE_BOTHEDGES_gc | AC_HSMODE_bm | AC_HYSMODE_LARGE_gc | AC_ENABLE_bm;
     EVSYS.CH0MUX = EVSYS_CHMUX_ACA_CH0_gc;
     EVSYS.CH1MUX = EVSYS_CHMUX_ACA_CH1_gc;
-    EVSYS.CH0CTRL = EVSYS_DIGFILT_2SAMPLES_gc;
-    EVSYS.CH1CTRL = EVSYS_DIGFILT_2SAMPLES_gc;
+    EVSYS.CH0CTRL = EVSYS_DIGFILT_8SAMPLES_gc;
+    EVSYS.CH1CTRL = EVSYS_DIGFILT_8SAMPLES_gc;
     TCD0.CTRLA = TC_CLKSEL_OFF_gc;
     TCD0.PER = 0xFFFF;
     TCD0.CTRLB = TC0_CCAEN_bm | TC0_CCBEN_bm | TC_WGMODE_NORMAL_gc;
@@ -208,9 +210,12 @@ ISR(TCD0_OVF_vect)
     capture_hi++;
 }
 
-/* Extends a 16-bit capture to 32 bits; called with interrupts masked (ISR). */
-static uint32_t extend(uint16_t lo)
+/* The capture clock now, 32 bits: the 16-bit count and the overflows counted so far, plus one when the count has
+ * wrapped but its overflow interrupt has not run yet. Called with interrupts masked, or from the HI-level capture
+ * interrupts, which the (HI-level) overflow interrupt cannot preempt halfway. */
+static uint32_t capture_clock(void)
 {
+    uint16_t lo = TCD0.CNT;
     uint16_t hi = capture_hi;
     if ((TCD0.INTFLAGS & TC0_OVFIF_bm) && lo < 0x8000u)
         hi++;
@@ -220,19 +225,28 @@ static uint32_t extend(uint16_t lo)
 uint32_t hal_capture_now(void)
 {
     uint8_t s = hal_irq_save();
-    uint32_t t = extend(TCD0.CNT);
+    uint32_t t = capture_clock();
     hal_irq_restore(s);
     return t;
 }
 
+/* A capture's time: the clock now, less how far the count has moved on since the capture (far less than a timer
+ * period: its interrupt runs within microseconds). Right at every phase of the wrap, whether the overflow's
+ * interrupt ran before the capture's or not (both are HI; the overflow's vector comes first). */
+static uint32_t capture_time(uint16_t captured)
+{
+    uint32_t now = capture_clock();
+    return now - (uint16_t)((uint16_t)now - captured);
+}
+
 ISR(TCD0_CCA_vect)
 {
-    encoder_capture_isr(0, extend(TCD0.CCA));
+    encoder_capture_isr(0, capture_time(TCD0.CCA));
 }
 
 ISR(TCD0_CCB_vect)
 {
-    encoder_capture_isr(1, extend(TCD0.CCB));
+    encoder_capture_isr(1, capture_time(TCD0.CCB));
 }
 
 /* ---- motors: TCE0 PWM at 20 kHz ------------------------------------------------------------- */

@@ -12,6 +12,7 @@ static const struct {
     {"time", suite_xm_time},
     {"ir", suite_xm_ir},
     {"colour", suite_xm_colour},
+    {"encoder", suite_xm_encoder},
 };
 
 int main(int argc, char **argv)

@@ -301,6 +301,17 @@ static tc_t *tc_at(uint16_t base)
     return NULL;
 }
 
+uint64_t xm_tc_next_count_time(uint16_t base, uint16_t count)
+{
+    tc_t *t = tc_at(base);
+    if (!t || !tick(t))
+        return XM_NEVER;
+    sync(t);
+    uint32_t top = xm_get16((uint16_t)(base + PER));
+    uint32_t period = t->cnt <= top ? top + 1u : 0x10000u;
+    return t->origin + (uint64_t)((count + period - t->cnt) % period) * tick(t);
+}
+
 uint8_t xm_tc_carrier_duty(void)
 {
     tc_t *t = tc_at(0x940); /* TCD1, CCB on PD5 */

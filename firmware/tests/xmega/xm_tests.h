@@ -7,5 +7,6 @@
 void suite_xm_time(void);
 void suite_xm_ir(void);
 void suite_xm_colour(void);
+void suite_xm_encoder(void);
 
 #endif

@@ -99,6 +99,9 @@ bool xm_dfll_enabled_early(void);
 uint8_t xm_sysclk(void);
 
 /* ---- timers and the encoders' comparators ---- */
+/** The time its count next becomes `count` (from the last count boundary on) for the timer at `base` (0x0900:
+ *  TCD0), or XM_NEVER when it is stopped. */
+uint64_t xm_tc_next_count_time(uint16_t base, uint16_t count);
 /** The output of analog comparator ACA.AC0 (`ac` 0) or AC1 toggles at `at` (an encoder stripe edge). */
 void xm_ac_toggle(uint8_t ac, uint64_t at);
 
