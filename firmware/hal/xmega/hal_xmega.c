@@ -10,10 +10,10 @@
  *   captures on CCA and CCB. The capture interrupt only extends the timestamp to 32 bits and hands it on.
  * - Motors: TCE0 single-slope PWM at 20 kHz on PE0..PE3 (left IN1/IN2, right IN1/IN2 of the H-bridges).
  * - Host link: USARTC0 (PC2 RX, PC3 TX) at 115200 Bd to the Bluetooth module, RXC and DRE interrupts.
- * - Line sensor: ADCA, detectors on PA4..PA7 converted in one sweep of channels 0..3; emitters on
- *   PB4..PB7 and PA3. Slow sensors (battery, current, accelerometer, temperature) on ADCB, converted in
- *   the background round robin; the colour sensor (TCS3472) over TWIC, read by an interrupt-driven
- *   state machine.
+ * - Line sensor: ADCA, detectors on PA4..PA7 converted in one sweep of channels 0..3; emitters on PA2,
+ *   PB5..PB7 and PA3. Slow sensors (temperature, VCC, current; battery, accelerometer) on ADCB in two sweeps
+ *   that the main loop starts and reads (no interrupts); the colour sensor (TCS3472) over TWIC, read by an
+ *   interrupt-driven state machine once per integration.
  * - IR: messages as 2400 Bd UART frames of 9 bits (a byte and its line code bit) on a 38 kHz carrier (TCD1 on
  *   PD5, power = carrier duty): TX from USARTD0 with the LED chosen by PC4..PC7; front receiver on USARTD0 RX
  *   (PD2), rear on USARTD1 RX (PD6).
@@ -21,7 +21,9 @@
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
+#include <avr/pgmspace.h>
 #include <avr/sleep.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "hal/hal.h"
@@ -317,22 +319,110 @@ ISR(USARTC0_DRE_vect)
 }
 
 /* ---- ADC: line sensor on ADCA, slow sensors on ADCB ----------------------------------------- */
+/* Both convert in signed mode (the A3 errata: unsigned mode's nonlinearity is not guaranteed; single-ended inputs
+ * read 0..2047), with the production signature row's calibration, at a clock slow enough for the inputs' source
+ * resistance: the XMEGA A samples for half an ADC clock, 4 us at 125 kHz, where the line detectors' load
+ * resistors (tens of kilohms) need about 9 time constants of the 5 pF sampling capacitor to settle (2 us). */
 
-static volatile uint16_t line_res[HAL_LINE_DETECTORS];
-static volatile int16_t slow_raw[6];
-static volatile uint8_t slow_index;
+static uint8_t prod_signature(uint8_t offset)
+{
+    NVM.CMD = NVM_CMD_READ_CALIB_ROW_gc;
+    uint8_t b = pgm_read_byte(offset);
+    NVM.CMD = NVM_CMD_NO_OPERATION_gc;
+    return b;
+}
 
-/* Slow analog inputs on ADCB: battery divider, current shunt amplifier, accelerometer x, y, z. */
-static const uint8_t slow_mux[5] = {ADC_CH_MUXPOS_PIN0_gc, ADC_CH_MUXPOS_PIN1_gc, ADC_CH_MUXPOS_PIN2_gc,
-                                    ADC_CH_MUXPOS_PIN3_gc, ADC_CH_MUXPOS_PIN4_gc};
+/* ADCB converts the slow inputs in two sweeps, started from the main loop when hal_sensor_read() finds the last
+ * one done (no interrupts): against the 1.00 V bandgap the temperature sensor, VCC/10 and the current sense;
+ * against VCC/1.6 the battery divider and the ratiometric accelerometer. A reference switched settles until the
+ * next call at least SLOW_SETTLE_US later. */
+#define SLOW_SETTLE_US 200u
+static int16_t slow_value[HAL_SENSOR_ACCEL_Z_MG + 1]; /* in hal_sensor_read()'s units */
+static uint8_t slow_sweep;        /* 0: bandgap sweep, 1: VCC/1.6 sweep */
+static uint8_t slow_started;      /* the sweep is converting (else its reference settles) */
+static uint32_t slow_switched_us; /* when its reference was switched */
+static uint16_t vcc_mv;
+static uint32_t temp_k16;         /* kelvin x 10 per count, in Q16 (from TEMPSENSE) */
+
+static void slow_configure(uint8_t sweep)
+{
+    slow_sweep = sweep;
+    slow_started = 0;
+    slow_switched_us = hal_micros();
+    if (sweep == 0) {
+        ADCB.REFCTRL = ADC_REFSEL_INT1V_gc | ADC_BANDGAP_bm | ADC_TEMPREF_bm;
+        ADCB.CH0.CTRL = ADC_CH_INPUTMODE_INTERNAL_gc;
+        ADCB.CH0.MUXCTRL = ADC_CH_MUXINT_TEMP_gc;
+        ADCB.CH1.CTRL = ADC_CH_INPUTMODE_INTERNAL_gc;
+        ADCB.CH1.MUXCTRL = ADC_CH_MUXINT_SCALEDVCC_gc;
+        ADCB.CH2.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+        ADCB.CH2.MUXCTRL = ADC_CH_MUXPOS_PIN1_gc; /* current sense, PB1 */
+    } else {
+        ADCB.REFCTRL = ADC_REFSEL_VCC_gc | ADC_BANDGAP_bm | ADC_TEMPREF_bm;
+        ADCB.CH0.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+        ADCB.CH0.MUXCTRL = ADC_CH_MUXPOS_PIN0_gc; /* battery divider, PB0 */
+        ADCB.CH1.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+        ADCB.CH1.MUXCTRL = ADC_CH_MUXPOS_PIN2_gc; /* accelerometer x, y, z: PB2, PB3, PB4 */
+        ADCB.CH2.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+        ADCB.CH2.MUXCTRL = ADC_CH_MUXPOS_PIN3_gc;
+        ADCB.CH3.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
+        ADCB.CH3.MUXCTRL = ADC_CH_MUXPOS_PIN4_gc;
+    }
+}
+
+static int16_t count(uint8_t ch)
+{
+    int16_t r = (int16_t)(&ADCB.CH0RES)[ch];
+    return r < 0 ? 0 : r; /* single-ended: 0..2047 */
+}
+
+/* Main loop: takes a finished sweep's results into physical units, switches to the other sweep, starts a settled
+ * one. Counts of 2048 per reference to units with multiplications and shifts only: VCC/1.6 counts are
+ * vcc_mv * 5 / 16384 mV each; the accelerometer is ratiometric (its counts do not depend on VCC). */
+static void slow_poll(void)
+{
+    if (!slow_started) {
+        if ((uint32_t)(hal_micros() - slow_switched_us) < SLOW_SETTLE_US)
+            return;
+        ADCB.INTFLAGS = ADC_CH0IF_bm | ADC_CH1IF_bm | ADC_CH2IF_bm | ADC_CH3IF_bm;
+        ADCB.CTRLA = (uint8_t)(ADC_ENABLE_bm | ADC_CH0START_bm | ADC_CH1START_bm | ADC_CH2START_bm |
+                               (slow_sweep ? ADC_CH3START_bm : 0u));
+        slow_started = 1;
+        return;
+    }
+    if (!(ADCB.INTFLAGS & (slow_sweep ? ADC_CH3IF_bm : ADC_CH2IF_bm)))
+        return;
+    if (slow_sweep == 0) {
+        slow_value[HAL_SENSOR_MCU_TEMP_DC] = (int16_t)((int32_t)(((uint32_t)count(0) * temp_k16) >> 16) - 2732);
+        vcc_mv = (uint16_t)(((uint32_t)count(1) * 625u) >> 7); /* VCC/10 against 1.00 V */
+        slow_value[HAL_SENSOR_CURRENT_MA] = (int16_t)(((uint32_t)count(2) * 125u) >> 8); /* BOARD: 1 mV per mA */
+    } else {
+        slow_value[HAL_SENSOR_BATTERY_MV] = (int16_t)(((uint32_t)count(0) * vcc_mv * 15u) >> 14); /* 1:3 divider */
+        for (uint8_t a = 0; a < 3; a++) /* zero g at VCC/2 = 0.8 of VCC/1.6 */
+            slow_value[HAL_SENSOR_ACCEL_X_MG + a] =
+                (int16_t)((((int32_t)count((uint8_t)(1 + a)) * 10 - 16384) * BOARD_ACCEL_MG_Q10) >> 10);
+    }
+    slow_configure((uint8_t)(slow_sweep ^ 1u));
+}
 
 static void adc_init_hw(void)
 {
-    PORTA.DIRSET = PIN3_bm;
-    PORTB.DIRSET = 0xF0;
-    ADCA.CTRLB = ADC_RESOLUTION_12BIT_gc;
-    ADCA.REFCTRL = ADC_REFSEL_VCC_gc | ADC_TEMPREF_bm;
-    ADCA.PRESCALER = ADC_PRESCALER_DIV16_gc; /* 2 MHz: a 4-channel sweep in about 14 us */
+    PORTA.DIRSET = BOARD_EMITTER_PA_MASK;
+    PORTB.DIRSET = BOARD_EMITTER_PB_MASK;
+    ADCA.CAL = (uint16_t)(prod_signature(offsetof(NVM_PROD_SIGNATURES_t, ADCACAL0)) |
+                          (uint16_t)prod_signature(offsetof(NVM_PROD_SIGNATURES_t, ADCACAL1)) << 8);
+    ADCB.CAL = (uint16_t)(prod_signature(offsetof(NVM_PROD_SIGNATURES_t, ADCBCAL0)) |
+                          (uint16_t)prod_signature(offsetof(NVM_PROD_SIGNATURES_t, ADCBCAL1)) << 8);
+    /* TEMPSENSE: the sensor's unsigned reading at 85 C (1.00 V reference), with that mode's offset of about 5 % of
+     * the reference (205 counts); in signed mode the same voltage reads half as many counts. */
+    uint16_t tempsense = (uint16_t)(prod_signature(offsetof(NVM_PROD_SIGNATURES_t, TEMPSENSE0)) |
+                                    (uint16_t)prod_signature(offsetof(NVM_PROD_SIGNATURES_t, TEMPSENSE1)) << 8);
+    temp_k16 = tempsense > 205u + 100u ? (2ul * 3581ul << 16) / (tempsense - 205u) : 0;
+    vcc_mv = BOARD_VCC_MV;
+
+    ADCA.CTRLB = ADC_CONMODE_bm | ADC_RESOLUTION_12BIT_gc;
+    ADCA.REFCTRL = ADC_REFSEL_VCC_gc;
+    ADCA.PRESCALER = ADC_PRESCALER_DIV256_gc; /* 125 kHz: 4 us samples, a 4-channel sweep in 80 us */
     ADCA.EVCTRL = ADC_SWEEP_0123_gc;
     ADCA.CH0.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
     ADCA.CH1.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
@@ -342,65 +432,39 @@ static void adc_init_hw(void)
     ADCA.CH1.MUXCTRL = ADC_CH_MUXPOS_PIN5_gc;
     ADCA.CH2.MUXCTRL = ADC_CH_MUXPOS_PIN6_gc;
     ADCA.CH3.MUXCTRL = ADC_CH_MUXPOS_PIN7_gc;
-    ADCA.CH3.INTCTRL = ADC_CH_INTLVL_LO_gc; /* the sweep ends with channel 3 */
     ADCA.CTRLA = ADC_ENABLE_bm;
 
-    ADCB.CTRLB = ADC_RESOLUTION_12BIT_gc;
-    ADCB.REFCTRL = ADC_REFSEL_INT1V_gc | ADC_BANDGAP_bm;
-    ADCB.PRESCALER = ADC_PRESCALER_DIV256_gc;
-    ADCB.CH0.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
-    ADCB.CH0.MUXCTRL = slow_mux[0];
-    ADCB.CH0.INTCTRL = ADC_CH_INTLVL_LO_gc;
+    ADCB.CTRLB = ADC_CONMODE_bm | ADC_RESOLUTION_12BIT_gc;
+    ADCB.PRESCALER = ADC_PRESCALER_DIV512_gc; /* 62.5 kHz: 8 us samples, a sweep in 160 us */
     ADCB.CTRLA = ADC_ENABLE_bm;
-    slow_index = 0;
-    ADCB.CH0.CTRL |= ADC_CH_START_bm;
+    memset(slow_value, 0, sizeof slow_value);
+    slow_configure(0);
 }
 
 void hal_line_emitters(uint8_t mask)
 {
-    /* Emitters 0..3 on PB4..PB7, emitter 4 on PA3. */
-    BOARD_EMITTER_PORT.OUT = (uint8_t)((BOARD_EMITTER_PORT.OUT & 0x0F) | ((mask & 0x0F) << 4));
-    if (mask & 0x10)
-        BOARD_EMITTER4_PORT.OUTSET = BOARD_EMITTER4_PIN;
-    else
-        BOARD_EMITTER4_PORT.OUTCLR = BOARD_EMITTER4_PIN;
+    /* Emitter 0 on PA2, 1..3 on PB5..PB7, 4 on PA3. */
+    PORTB.OUT = (uint8_t)((PORTB.OUT & ~BOARD_EMITTER_PB_MASK) | ((mask & 0x0Eu) << 4));
+    PORTA.OUT = (uint8_t)((PORTA.OUT & ~BOARD_EMITTER_PA_MASK) | ((mask & 0x01u) << 2) | ((mask & 0x10u) >> 1));
 }
 
 void hal_line_convert(void)
 {
-    ADCA.CTRLA |= ADC_CH0START_bm | ADC_CH1START_bm | ADC_CH2START_bm | ADC_CH3START_bm;
+    ADCA.CTRLA = ADC_ENABLE_bm | ADC_CH0START_bm | ADC_CH1START_bm | ADC_CH2START_bm | ADC_CH3START_bm;
 }
 
-ISR(ADCA_CH3_vect)
-{
-    line_res[0] = ADCA.CH0.RES;
-    line_res[1] = ADCA.CH1.RES;
-    line_res[2] = ADCA.CH2.RES;
-    line_res[3] = ADCA.CH3.RES;
-}
-
+/* The sweep is done by then (hal.h: within 100 us); signed single-ended results 0..2047 as 12 bits. */
 void hal_line_results(uint16_t out[HAL_LINE_DETECTORS])
 {
-    uint8_t s = hal_irq_save();
-    for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++)
-        out[d] = line_res[d];
+    int16_t r[HAL_LINE_DETECTORS];
+    uint8_t s = hal_irq_save(); /* the 16-bit reads share ADCA's TEMP register */
+    r[0] = (int16_t)ADCA.CH0.RES;
+    r[1] = (int16_t)ADCA.CH1.RES;
+    r[2] = (int16_t)ADCA.CH2.RES;
+    r[3] = (int16_t)ADCA.CH3.RES;
     hal_irq_restore(s);
-}
-
-ISR(ADCB_CH0_vect)
-{
-    uint8_t i = slow_index;
-    slow_raw[i] = (int16_t)ADCB.CH0.RES;
-    i = (uint8_t)((i + 1u) % 6u);
-    slow_index = i;
-    if (i < 5) {
-        ADCB.CH0.CTRL = ADC_CH_INPUTMODE_SINGLEENDED_gc;
-        ADCB.CH0.MUXCTRL = slow_mux[i];
-    } else { /* the internal temperature sensor */
-        ADCB.CH0.CTRL = ADC_CH_INPUTMODE_INTERNAL_gc;
-        ADCB.CH0.MUXCTRL = ADC_CH_MUXINT_TEMP_gc;
-    }
-    ADCB.CH0.CTRL |= ADC_CH_START_bm;
+    for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++)
+        out[d] = r[d] < 0 ? 0u : (uint16_t)(r[d] << 1);
 }
 
 static void colour_poll(void);
@@ -409,33 +473,13 @@ static volatile uint8_t colour_valid;
 
 int32_t hal_sensor_read(uint8_t sensor)
 {
-    int32_t raw;
     if (sensor >= HAL_SENSOR_COLOUR_R && sensor < HAL_SENSOR_COUNT) {
         colour_poll();
         uint8_t c = colour[(sensor - HAL_SENSOR_COLOUR_R + 1u) & 3u]; /* the sensor's order: clear, red, green, blue */
         return colour_valid ? c : -1;
     }
-    uint8_t s = hal_irq_save();
-    if (sensor <= HAL_SENSOR_ACCEL_Z_MG)
-        raw = slow_raw[sensor == HAL_SENSOR_MCU_TEMP_DC ? 5 : sensor < 2 ? sensor : sensor - 1];
-    else
-        raw = 0;
-    hal_irq_restore(s);
-    /* 12-bit counts of a 1.0 V reference to physical units (board-specific dividers and gains). */
-    switch (sensor) {
-    case HAL_SENSOR_BATTERY_MV:
-        return raw * 2000 / 4095 * 3;            /* 1:3 divider */
-    case HAL_SENSOR_CURRENT_MA:
-        return raw * 1000 / 4095;                /* 1 mV per mA */
-    case HAL_SENSOR_MCU_TEMP_DC:
-        return (raw - 1400) * 10 / 4 + 250;      /* linear around the factory point */
-    case HAL_SENSOR_ACCEL_X_MG:
-    case HAL_SENSOR_ACCEL_Y_MG:
-    case HAL_SENSOR_ACCEL_Z_MG:
-        return (raw - 2048) * 1000 / 410;        /* analog accelerometer, 0.1 V/g around mid-scale */
-    default:
-        return raw;
-    }
+    slow_poll();
+    return sensor < HAL_SENSOR_COLOUR_R ? slow_value[sensor] : 0;
 }
 
 /* ---- colour sensor: TCS3472 on TWIC, configured, then read once per integration -------------- */

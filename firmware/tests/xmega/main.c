@@ -13,6 +13,7 @@ static const struct {
     {"ir", suite_xm_ir},
     {"colour", suite_xm_colour},
     {"encoder", suite_xm_encoder},
+    {"analog", suite_xm_analog},
 };
 
 int main(int argc, char **argv)

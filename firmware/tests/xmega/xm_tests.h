@@ -8,5 +8,6 @@ void suite_xm_time(void);
 void suite_xm_ir(void);
 void suite_xm_colour(void);
 void suite_xm_encoder(void);
+void suite_xm_analog(void);
 
 #endif
