@@ -22,6 +22,7 @@ void hal_init(void) { bench_set_line_spot(bench_line_spot); }
 void hal_irq_enable(void) { sei(); }
 uint8_t hal_board_id(void) { return 0; }
 void hal_idle(void) {}
+void hal_tick_done(void) {}
 
 uint8_t hal_irq_save(void)
 {

@@ -115,6 +115,11 @@ bool scheduler_tick_begin(void)
     return true;
 }
 
+bool scheduler_tick_due(void)
+{
+    return ticks_pending != 0;
+}
+
 void scheduler_tick_end(void)
 {
     uint32_t took = hal_micros() - tick_start;

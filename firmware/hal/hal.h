@@ -38,19 +38,16 @@ void hal_irq_enable(void);
 /** \return a robot id imposed by the board (the emulator), or 0 to use settings.identity.robot_id. */
 uint8_t hal_board_id(void);
 
-/** Waits for the next interrupt (sleep mode idle); returns at once where there is nothing to wait for. */
+/** Sleeps until the next interrupt (sleep mode idle). Call it with interrupts masked (hal_irq_save()) after
+ *  finding nothing to do: it enables them and sleeps in one step, so an interrupt that came after the check wakes
+ *  it at once instead of being slept through. Returns with interrupts enabled; at once where there is nothing to
+ *  wait for. */
 void hal_idle(void);
 
-/** Called at the end of every main loop tick, before the scheduler measures how long it took. Only the
- *  emulator's HAL (built with HAL_SIM) does something: code takes no simulated time there, and a test can
- *  make a tick last (sim_host_stretch_tick_us()). Elsewhere it compiles to nothing. */
-#ifdef HAL_SIM
+/** Called at the end of every main loop tick, before the scheduler measures how long it took. The robot's HAL
+ *  resets its watchdog here (a main loop that stops ending ticks resets the MCU); the emulator's (HAL_SIM) lets a
+ *  test make a tick last (code takes no simulated time there: sim_host_stretch_tick_us()). */
 void hal_tick_done(void);
-#else
-static inline void hal_tick_done(void)
-{
-}
-#endif
 
 /** Masks interrupts; \return the previous state for hal_irq_restore(). */
 uint8_t hal_irq_save(void);
@@ -93,6 +90,11 @@ void hal_motors_set(int16_t left, int16_t right);
 void hal_uart_tx_kick(void);
 /** A received byte. */
 void uart_rx_isr(uint8_t byte);
+/** What the USART saw wrong before the byte it delivers next (or instead of it): */
+#define HAL_UART_OVERRUN 0x01u /**< bytes were lost: the receiver's buffer was full (the next byte is delivered) */
+#define HAL_UART_FRAME 0x02u   /**< a byte with a bad stop bit (noise, another baud rate, a break): not delivered */
+/** Receive errors (HAL_UART_* bits), from the receive interrupt, just before uart_rx_isr() of the next byte. */
+void uart_rx_error_isr(uint8_t errors);
 /** \return the next byte to transmit, or -1 when none is queued. */
 int16_t uart_tx_isr(void);
 

@@ -452,7 +452,7 @@ typedef struct PB_PACKED {
     uint16_t crc; /**< frames whose CRC failed */
     uint16_t framing; /**< runs of received bytes (between two ENDs) that made no frame: bad SLIP, shorter than 5 or longer than 125 bytes */
     uint16_t rejected; /**< frames with a sound CRC that were refused, for any reason */
-    uint16_t rx_overflow; /**< bytes lost to a full receive buffer */
+    uint16_t rx_overflow; /**< received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped) */
     uint16_t tx_dropped; /**< packets not sent because the transmit buffer was full */
 } pb_state_errors_t;
 PB_STATIC_ASSERT(sizeof(pb_state_errors_t) == 10, "pb_state_errors_t size");

@@ -9,7 +9,10 @@
  *   signals; their output toggles reach TCD0 (clk/8, 4 MHz) through event channels 0 and 1 as input
  *   captures on CCA and CCB. The capture interrupt only extends the timestamp to 32 bits and hands it on.
  * - Motors: TCE0 single-slope PWM at 20 kHz on PE0..PE3 (left IN1/IN2, right IN1/IN2 of the H-bridges).
- * - Host link: USARTC0 (PC2 RX, PC3 TX) at 115200 Bd to the Bluetooth module, RXC and DRE interrupts.
+ * - Host link: USARTC0 (PC2 RX, PC3 TX) at 115200 Bd to the Bluetooth module, RXC and DRE interrupts; receive
+ *   errors (overrun, frame error) reported through uart_rx_error_isr().
+ * - Recovery: a 128 ms watchdog that the main loop resets at the end of each tick; a stray interrupt resets
+ *   the MCU; hal_idle() enables interrupts and sleeps in one step.
  * - Line sensor: ADCA, detectors on PA4..PA7 converted in one sweep of channels 0..3; emitters on PA2,
  *   PB5..PB7 and PA3. Slow sensors (temperature, VCC, current; battery, accelerometer) on ADCB in two sweeps
  *   that the main loop starts and reads (no interrupts); the colour sensor (TCS3472) over TWIC, read by an
@@ -23,6 +26,7 @@
 #include <avr/io.h>
 #include <avr/pgmspace.h>
 #include <avr/sleep.h>
+#include <avr/wdt.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -35,13 +39,39 @@
 
 static void clock_init(void)
 {
-    OSC.CTRL |= OSC_RC32MEN_bm;
+    /* The 32 MHz RC, and the 32.768 kHz RC its DFLL trims it against (the UARTs' baud rates depend on it). */
+    OSC.CTRL |= OSC_RC32MEN_bm | OSC_RC32KEN_bm;
     while (!(OSC.STATUS & OSC_RC32MRDY_bm)) {
         /* boot only: the 32 MHz oscillator starts within microseconds */
     }
     _PROTECTED_WRITE(CLK_CTRL, CLK_SCLKSEL_RC32M_gc);
-    OSC.CTRL |= OSC_RC32KEN_bm; /* 32.768 kHz reference for the DFLL that trims the 32 MHz RC */
+    while (!(OSC.STATUS & OSC_RC32KRDY_bm)) {
+        /* boot only, about a millisecond: a DFLL enabled on a reference that is not running yet mistrims */
+    }
     DFLLRC32M.CTRL = DFLL_ENABLE_bm;
+}
+
+/* The watchdog resets the MCU when the main loop stops ending its ticks (hal_tick_done()) for 128 ms: a hang, or
+ * an interrupt storm that starves it. A reset stops the motors' PWM with every other peripheral. */
+static void watchdog_init(void)
+{
+    while (WDT.STATUS & WDT_SYNCBUSY_bm) {
+    }
+    _PROTECTED_WRITE(WDT_CTRL, WDT_PER_128CLK_gc | WDT_ENABLE_bm | WDT_CEN_bm);
+    while (WDT.STATUS & WDT_SYNCBUSY_bm) {
+    }
+}
+
+void hal_tick_done(void)
+{
+    wdt_reset();
+}
+
+/* An interrupt enabled without a handler: avr-libc would jump to 0 without a reset, leaving the PMIC's level
+ * active (every interrupt at it and below blocked for good). A real reset instead. */
+ISR(BADISR_vect)
+{
+    _PROTECTED_WRITE(RST_CTRL, RST_SWRST_bm);
 }
 
 static void sched_timer_init(void);
@@ -56,6 +86,7 @@ void hal_init(void)
 {
     cli();
     clock_init();
+    watchdog_init();
     BOARD_LED_PORT.DIRSET = BOARD_LED_MASK;
     sched_timer_init();
     encoder_init_hw();
@@ -80,6 +111,7 @@ uint8_t hal_board_id(void)
 void hal_idle(void)
 {
     SLEEP.CTRL = SLEEP_SMODE_IDLE_gc | SLEEP_SEN_bm;
+    sei(); /* the instruction after SEI runs before any interrupt: an interrupt pending now wakes the SLEEP at once */
     sleep_cpu();
     SLEEP.CTRL = 0;
 }
@@ -306,7 +338,14 @@ void hal_uart_tx_kick(void)
 
 ISR(USARTC0_RXC_vect)
 {
-    uart_rx_isr(USARTC0.DATA);
+    uint8_t status = USARTC0.STATUS; /* the errors belong to the byte in DATA: read first */
+    uint8_t byte = USARTC0.DATA;
+    uint8_t errors = (uint8_t)(((status & USART_BUFOVF_bm) ? HAL_UART_OVERRUN : 0u) |
+                               ((status & USART_FERR_bm) ? HAL_UART_FRAME : 0u));
+    if (errors)
+        uart_rx_error_isr(errors);
+    if (!(errors & HAL_UART_FRAME))
+        uart_rx_isr(byte);
 }
 
 ISR(USARTC0_DRE_vect)

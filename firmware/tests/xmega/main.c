@@ -14,6 +14,8 @@ static const struct {
     {"colour", suite_xm_colour},
     {"encoder", suite_xm_encoder},
     {"analog", suite_xm_analog},
+    {"recovery", suite_xm_recovery},
+    {"uart", suite_xm_uart},
 };
 
 int main(int argc, char **argv)

@@ -34,6 +34,9 @@ static struct {
     bool sei_delay;         /* the instruction after SEI runs before any interrupt */
     void (*on_restart)(uint8_t why);
     uint32_t restarts[4];
+    uint64_t restart_at;
+    uint16_t hook_addr; /* after the next write there, hook() runs (once) */
+    void (*hook)(void);
     uint32_t irq_count[XM_VECTORS], irq_ms_count[XM_VECTORS], irq_ms_max[XM_VECTORS];
     uint64_t irq_ms; /* the millisecond irq_ms_count counts */
     uint32_t strays;
@@ -203,6 +206,11 @@ void xm_write8(uint16_t addr, uint8_t v)
     else
         xm_io[addr] = v;
     xm_changed();
+    if (m.hook && addr == m.hook_addr) {
+        void (*hook)(void) = m.hook;
+        m.hook = NULL;
+        hook();
+    }
     access_done();
 }
 
@@ -386,6 +394,12 @@ void xm_sleep(void)
         p->event(p);
         xm_changed();
     }
+}
+
+void xm_after_write(uint16_t addr, void (*fn)(void))
+{
+    m.hook_addr = addr;
+    m.hook = fn;
 }
 
 void xm_busy(uint64_t cycles, bool masked)
@@ -658,9 +672,15 @@ uint32_t xm_restarts(uint8_t why)
     return why < 4 ? m.restarts[why] : 0;
 }
 
+uint64_t xm_last_restart_at(void)
+{
+    return m.restart_at;
+}
+
 void xm_restart(uint8_t why)
 {
     m.restarts[why]++;
+    m.restart_at = xm_time;
     xm_changed();
     if (why != XM_RESTART_JUMP_TO_0) {
         registers_on(false);

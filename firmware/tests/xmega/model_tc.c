@@ -301,6 +301,17 @@ static tc_t *tc_at(uint16_t base)
     return NULL;
 }
 
+double xm_tc_duty(uint16_t base, uint8_t ch)
+{
+    tc_t *t = tc_at(base);
+    if (!t || ch >= t->channels || !tick(t) || (reg(t, 0x01) & TC0_WGMODE_gm) != TC_WGMODE_SS_gc ||
+        !(reg(t, 0x01) & (TC0_CCAEN_bm << ch)))
+        return 0.0;
+    sync(t);
+    uint32_t per = xm_get16((uint16_t)(base + PER)) + 1u, cc = xm_get16((uint16_t)(base + CCA + 2u * ch));
+    return cc >= per ? 100.0 : 100.0 * cc / per;
+}
+
 uint64_t xm_tc_next_count_time(uint16_t base, uint16_t count)
 {
     tc_t *t = tc_at(base);

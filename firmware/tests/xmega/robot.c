@@ -17,6 +17,7 @@ static jmp_buf run_env;
 static bool in_run;
 static uint8_t restart_why;
 static uint32_t ticks;
+static uint64_t tick_at[ROBOT_TICK_TIMES];
 
 static void on_restart(uint8_t why)
 {
@@ -60,10 +61,12 @@ uint8_t robot_run_until(uint64_t t)
     }
     in_run = true;
     while (xm_now() < t) { /* main.c's loop */
-        if (app_poll())
+        if (app_poll()) {
+            tick_at[ticks % ROBOT_TICK_TIMES] = xm_now();
             ticks++;
-        else
-            hal_idle();
+        } else {
+            app_idle();
+        }
     }
     in_run = false;
     xm_set_horizon(UINT64_MAX);
@@ -78,6 +81,11 @@ uint8_t robot_run_us(uint64_t us)
 uint32_t robot_ticks(void)
 {
     return ticks;
+}
+
+uint64_t robot_tick_time(uint32_t n)
+{
+    return n < ticks && ticks - n <= ROBOT_TICK_TIMES ? tick_at[n % ROBOT_TICK_TIMES] : 0;
 }
 
 /* ---- the host link's frames ---- */

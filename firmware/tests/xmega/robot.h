@@ -15,12 +15,15 @@
 void robot_boot(void);
 /** Starts the firmware again after the CPU restarted (app_init() on the model as the restart left it). */
 void robot_restart(void);
-/** Runs the main loop (app_poll(), then sleep in hal_idle() when nothing is due, as main.c) until `t`.
+/** Runs the main loop (app_poll(), then app_idle() when nothing is due, as main.c) until `t`.
  *  \return XM_RESTART_NONE, or what restarted the CPU: the run ends there */
 uint8_t robot_run_until(uint64_t t);
 uint8_t robot_run_us(uint64_t us);
 /** Main loop ticks run since boot. */
 uint32_t robot_ticks(void);
+/** When the n-th tick (0-based, one of the last ROBOT_TICK_TIMES) ended (cycles), else 0. */
+#define ROBOT_TICK_TIMES 64u
+uint64_t robot_tick_time(uint32_t n);
 
 /** Packets the robot sent on the host link (USARTC0) since the last robot_frames_clear(): how many of a type,
  *  and the first ROBOT_FRAMES_KEPT of them. */

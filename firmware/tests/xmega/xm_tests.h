@@ -9,5 +9,7 @@ void suite_xm_ir(void);
 void suite_xm_colour(void);
 void suite_xm_encoder(void);
 void suite_xm_analog(void);
+void suite_xm_recovery(void);
+void suite_xm_uart(void);
 
 #endif

@@ -67,6 +67,9 @@ void xm_set_horizon(uint64_t t);
 /** The CPU runs code without register accesses for `cycles`: interrupts are served as they come, or (masked)
  *  wait until it ends, as in a critical section. */
 void xm_busy(uint64_t cycles, bool masked);
+/** Runs `fn` (once) right after the program's next write to `addr`, before any interrupt is served: a test's way
+ *  to make something happen at an exact point of the program (fn may let time pass with xm_busy()). */
+void xm_after_write(uint16_t addr, void (*fn)(void));
 /** Lets time pass quickly: only the timers' overflow interrupts are served meanwhile (the others stay pending,
  *  as behind a long critical section) and the watchdog is held. For uptime tests that skip hours. */
 void xm_fast_forward(uint64_t cycles);
@@ -77,6 +80,8 @@ enum { XM_RESTART_NONE = 0, XM_RESTART_WATCHDOG, XM_RESTART_SOFTWARE, XM_RESTART
 /** Called when the CPU restarts (from inside the code that caused it); NULL: the model only counts it. */
 void xm_on_restart(void (*fn)(uint8_t why));
 uint32_t xm_restarts(uint8_t why);
+/** When the CPU last restarted (cycles). */
+uint64_t xm_last_restart_at(void);
 
 /* ---- interrupts ---- */
 /** Interrupts served per vector since power-on or xm_irq_clear_counts(). */
@@ -102,6 +107,9 @@ uint8_t xm_sysclk(void);
 /** The time its count next becomes `count` (from the last count boundary on) for the timer at `base` (0x0900:
  *  TCD0), or XM_NEVER when it is stopped. */
 uint64_t xm_tc_next_count_time(uint16_t base, uint16_t count);
+/** The share of time (percent) compare output `ch` of the timer at `base` is high: 0 when the timer or its output is
+ *  off (single-slope PWM only). TCE0 (0x0A00) drives the motors. */
+double xm_tc_duty(uint16_t base, uint8_t ch);
 /** The output of analog comparator ACA.AC0 (`ac` 0) or AC1 toggles at `at` (an encoder stripe edge). */
 void xm_ac_toggle(uint8_t ac, uint64_t at);
 

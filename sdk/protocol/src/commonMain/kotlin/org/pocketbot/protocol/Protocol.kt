@@ -1363,7 +1363,7 @@ public class StateErrors(
     public val framing: Int,
     /** frames with a sound CRC that were refused, for any reason */
     public val rejected: Int,
-    /** bytes lost to a full receive buffer */
+    /** received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped) */
     public val rxOverflow: Int,
     /** packets not sent because the transmit buffer was full */
     public val txDropped: Int,
