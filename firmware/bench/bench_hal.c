@@ -39,9 +39,9 @@ void hal_irq_restore(uint8_t saved)
 uint32_t hal_micros(void) { return bench_us; }
 uint32_t hal_capture_now(void) { return bench_us * 4u; }
 
-void hal_sched_arm(uint8_t ch, uint32_t at_us)
+void hal_sched_arm(uint8_t ch, uint32_t delay_us)
 {
-    sched_at[ch] = at_us;
+    sched_at[ch] = bench_us + delay_us;
     sched_armed |= (uint8_t)(1u << ch);
 }
 

@@ -63,9 +63,9 @@ uint32_t hal_micros(void);
 /** Longest delay hal_sched_arm() accepts from now; the scheduler re-arms for longer ones. */
 #define HAL_SCHED_MAX_DELAY_US 60000ul
 
-/** Arms compare channel `ch` to call scheduler_isr(ch) once when hal_micros() reaches `at_us`.
- *  A time already past fires as soon as possible. */
-void hal_sched_arm(uint8_t ch, uint32_t at_us);
+/** Arms compare channel `ch` to call scheduler_isr(ch) once, `delay_us` from now (at most
+ *  HAL_SCHED_MAX_DELAY_US; 0: as soon as possible). Relative, so that the HAL needs no time of its own. */
+void hal_sched_arm(uint8_t ch, uint32_t delay_us);
 void hal_sched_disarm(uint8_t ch);
 /** Compare interrupt of channel `ch`. */
 void scheduler_isr(uint8_t ch);

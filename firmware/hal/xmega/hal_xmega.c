@@ -172,19 +172,15 @@ uint32_t hal_micros(void)
 
 static register16_t *const sched_cc[4] = {&TCC0.CCA, &TCC0.CCB, &TCC0.CCC, &TCC0.CCD};
 
-void hal_sched_arm(uint8_t ch, uint32_t at_us)
+void hal_sched_arm(uint8_t ch, uint32_t delay_us)
 {
     if (ch >= HAL_SCHED_CHANNELS)
         return;
+    /* Relative to the count now: no 32-bit time here (the absolute time it compared once wrapped at another point
+     * than hal_micros()). A few ticks at least, so that the count has not passed the compare value already. */
+    uint16_t ticks = delay_us < 8u ? 4u : delay_us >= 2ul * 0xFFF0u ? 0xFFF0u : (uint16_t)((delay_us + 1u) >> 1);
     uint8_t s = hal_irq_save();
-    uint32_t now = sched_ticks();
-    /* How far ahead, compared in microseconds as hal_micros() counts them (mod 2^32, so across its wrap), then in
-     * timer ticks: the timer's own 32-bit count would wrap at another time (after 143 minutes). */
-    int32_t ahead_us = (int32_t)(at_us - (now << 1));
-    uint16_t ticks = ahead_us < 8 ? 4u /* already due: fire in a few microseconds rather than after a wrap */
-                     : ahead_us >= 2 * 0xFFF0l ? 0xFFF0u
-                                              : (uint16_t)((ahead_us + 1) >> 1);
-    *sched_cc[ch] = (uint16_t)(now + ticks);
+    *sched_cc[ch] = (uint16_t)(TCC0.CNT + ticks);
     TCC0.INTFLAGS = (uint8_t)(TC0_CCAIF_bm << ch);
     uint8_t shift = (uint8_t)(2 * ch);
     TCC0.INTCTRLB = (uint8_t)((TCC0.INTCTRLB & ~(3u << shift)) | (TC_CCAINTLVL_MED_gc << shift));
@@ -696,13 +692,18 @@ typedef struct {
 } ir_rx_t;
 static ir_rx_t ir_rx[2];
 
+/* CRC-8 (polynomial 0x07, initial 0) a nibble at a time: it runs in the transmitter's scheduler interrupt and the
+ * receivers' (bit by bit it took 1000 cycles for a message). */
+static const HAL_FLASH uint8_t crc8_nibble[16] = {0x00, 0x07, 0x0E, 0x09, 0x1C, 0x1B, 0x12, 0x15,
+                                                  0x38, 0x3F, 0x36, 0x31, 0x24, 0x23, 0x2A, 0x2D};
+
 static uint8_t crc8(const uint8_t *p, uint8_t n)
 {
     uint8_t c = 0;
     while (n--) {
         c ^= *p++;
-        for (uint8_t i = 0; i < 8; i++)
-            c = (uint8_t)((c & 0x80u) ? (uint8_t)((c << 1) ^ 0x07u) : (uint8_t)(c << 1));
+        c = (uint8_t)((uint8_t)(c << 4) ^ crc8_nibble[c >> 4]);
+        c = (uint8_t)((uint8_t)(c << 4) ^ crc8_nibble[c >> 4]);
     }
     return c;
 }

@@ -16,6 +16,7 @@ static const struct {
     {"analog", suite_xm_analog},
     {"recovery", suite_xm_recovery},
     {"uart", suite_xm_uart},
+    {"load", suite_xm_load},
 };
 
 int main(int argc, char **argv)

@@ -337,7 +337,7 @@ uint8_t xm_tc_carrier_duty(void)
 
 /* ---- ACA -> event system -> capture ---- */
 
-#define AC_QUEUE 256u
+#define AC_QUEUE 1024u
 
 static struct {
     uint64_t at[AC_QUEUE];

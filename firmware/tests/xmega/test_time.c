@@ -64,7 +64,7 @@ static void disarming_a_channel_returns_and_keeps_it_quiet(void)
     robot_boot();
     robot_run_us(5000);
     uint32_t before = xm_irq_count(TCC0_CCD_vect_num);
-    hal_sched_arm(3, hal_micros() + 1000);
+    hal_sched_arm(3, 1000);
     hal_sched_disarm(3);
     robot_run_us(3000);
     CHECK(xm_irq_count(TCC0_CCD_vect_num) == before, "channel 3 fired after it was disarmed");

@@ -11,5 +11,6 @@ void suite_xm_encoder(void);
 void suite_xm_analog(void);
 void suite_xm_recovery(void);
 void suite_xm_uart(void);
+void suite_xm_load(void);
 
 #endif
