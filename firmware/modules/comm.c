@@ -537,9 +537,11 @@ static uint8_t waiting_host(uint8_t except)
     return COMM_NO_LINK;
 }
 
-/* Nobody drives now; a host that asked to drive and was waiting gets the drive. */
+/* Nobody drives now: the driver left on purpose (goodbye, or it asked to watch), so what it queued is the robot's to
+ * finish and the failsafe guards nothing; a host that asked to drive and was waiting gets the drive. */
 static void seat_free(uint8_t change)
 {
+    guarded = 0;
     seat.taken = 0;
     seat.link = COMM_NO_LINK;
     seat.expired = 0;
@@ -572,10 +574,8 @@ static void seat_watch(void)
 static void leave(uint8_t k)
 {
     links[k].wants = PB_HOST_ROLE_WATCH;
-    if (seat.link == k) {
-        guarded = 0;
+    if (seat.link == k)
         seat_free(PB_DRIVER_CHANGE_LEFT);
-    }
 }
 
 /* ---- links ---- */
