@@ -68,6 +68,8 @@ fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<Vie
         shoot(View.COMMANDS, "watching")
         other.disconnect()
         tuned.driving.first { it.byThisHost }
+        // What the user was told of it (taken over, then driving again) is not part of the next views.
+        model.notices.first { n -> n.any { it.text.startsWith("this panel drives") } }.forEach(model::dismiss)
         // Track (thesis A.3): three robots on the track world running the behaviour: the overview with its track
         // column, the world with the token holder's orange light, and the token holder's Commands view.
         tuned.movements.first { it.last().result != null } // ended before its robot goes with the old world
