@@ -15,6 +15,7 @@ import com.github.ajalt.clikt.parameters.options.switch
 import com.github.ajalt.clikt.parameters.types.double
 import com.github.ajalt.clikt.parameters.types.int
 import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Job
 import kotlinx.coroutines.TimeoutCancellationException
 import kotlinx.coroutines.coroutineScope
 import kotlinx.coroutines.launch
@@ -148,7 +149,7 @@ fun robotCommand(
     val code = runBlocking {
         val progress = Progress()
         var robots = emptyList<Robot>()
-        var listening = emptyList<kotlinx.coroutines.Job>()
+        var listening = emptyList<Job>()
         try {
             progress.show("looking for robots")
             // Robots named by name or address end the search once all are found; ids and --all need the whole scan;
