@@ -354,8 +354,9 @@ class ConsoleCommand : DrivingCommand("console") {
     override fun help(context: Context) = """
         Prints the robot's debug text, and the SDK's messages about its link, until stopped. It only watches the robot.
 
-        --level sets the robot's debug level first (1 errors, 2 info, 3 verbose, 4 trace), driving it to do so; while
-        another host drives it, the level stays as it is, unless --take-over.
+        --level sets the robot's debug level first (1 errors, 2 info, 3 verbose, 4 trace), driving it to do so and then
+        only watching (a host that waits to drive it gets it back); while another host drives it, the level stays as
+        it is, unless --take-over.
 
         Example: pocketbot console PocketBot-1 --level 3
     """.trimIndent()
@@ -369,8 +370,10 @@ class ConsoleCommand : DrivingCommand("console") {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         level?.let { l ->
             onEach(robots) { r ->
-                if (r.driving.value.byThisHost) r.settings.debug.level.set(l)
-                else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
+                if (r.driving.value.byThisHost) {
+                    r.settings.debug.level.set(l)
+                    r.setRole(Role.WATCH) // reading the console needs no drive: the robot is free for other hosts
+                } else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
             }
         }
         out.stream(linkedMapOf(
