@@ -105,6 +105,7 @@ class PanelDrivingUiTest {
 }
 
 /** What PocketBot-1's card in the sidebar says of who drives it (a text inside the card's merged semantics), or null. */
+@OptIn(ExperimentalTestApi::class)
 private fun ComposeUiTest.driver(): String? =
     if (onAllNodes(hasTestTag("driver-PocketBot-1"), useUnmergedTree = true).fetchSemanticsNodes().isEmpty()) null
     else onNodeWithTag("driver-PocketBot-1", useUnmergedTree = true).text()
