@@ -57,7 +57,7 @@ class BackgroundStartRule : ShadowContextImpl() {
  * apps stop the robot (ground truth); the screen stays on while the robot drives.
  */
 @RunWith(org.robolectric.RobolectricTestRunner::class)
-@Config(sdk = [35], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi", shadows = [BackgroundStartRule::class])
+@Config(sdk = [35], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi", shadows = [BackgroundStartRule::class, PlatformBluetoothDevice::class])
 class LifecycleTest {
     @After
     fun foreground() {
@@ -185,6 +185,7 @@ class LifecycleTest {
      * the robot itself. Pressed as Android 13+ delivers it, to the window's top OnBackInvokedCallback.
      */
     @Test
+    @Config(sdk = [31, 35])
     fun backWithARobotDrivingStopsItAndAsksToLeave() = withApp {
         connectRobot()
         val session = model.session.value!!
