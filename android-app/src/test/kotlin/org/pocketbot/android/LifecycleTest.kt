@@ -129,7 +129,9 @@ class LifecycleTest {
         assertEquals("PocketBot-1", shadowOf(app).nextStartedService?.getStringExtra("robot"), "started now")
     }
 
+    /** Android 12 shows the notification without asking; 13 and later only if the user allows it. */
     @Test
+    @Config(sdk = [31, 35])
     fun theNotificationIsAskedForOnAndroid13AndItsStopButtonStopsTheRobot() = withApp {
         connectRobot()
         val asked = shadowOf(activity).lastRequestedPermission
@@ -182,7 +184,8 @@ class LifecycleTest {
 
     /**
      * Android 12 and later move a launcher activity to the background on Back instead of finishing it: Back must stop
-     * the robot itself. Pressed as Android 13+ delivers it, to the window's top OnBackInvokedCallback.
+     * the robot itself. Pressed as a key into the window: Android 12 hands it to the Activity (onBackPressed), 13 and
+     * later to the window's top OnBackInvokedCallback.
      */
     @Test
     @Config(sdk = [31, 35])
