@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the PocketBot APK without Gradle (Maven calls this; see pom.xml):
 #
-#   apk.sh resources                      aapt2: res/ and the manifest -> $BUILD_DIR/resources.ap_ (+ R8 keep rules)
+#   apk.sh resources                      aapt2: res/ and the manifest (merged: + uses-sdk) -> $BUILD_DIR/resources.ap_
 #   apk.sh package CLASSES CLASSPATH      R8 -> dex, the APK, zipalign, a debug signature, then its checks
 #
 # Environment (set by the pom): ANDROID_JAR (android-all of API 35: the platform to link and compile against),
@@ -37,7 +37,8 @@ resources() {
   # The build's manifest, as Android's manifest merger writes it: the source with this build's SDK levels. The
   # Robolectric tests read it too (test_config.properties), so they run the app as the phone does: targeting 35.
   awk -v sdk="    <uses-sdk android:minSdkVersion=\"$MIN_SDK\" android:targetSdkVersion=\"$TARGET_SDK\" />" \
-    '/^ *<!--|^ *<(uses-|application)/ && !done { print sdk; print ""; done = 1 } { print }' "$HERE/src/main/AndroidManifest.xml" >"$BUILD_DIR/AndroidManifest.xml"
+    '/^ *<!--|^ *<(uses-|application)/ && !done { print sdk; print ""; done = 1 } { print }' \
+    "$HERE/src/main/AndroidManifest.xml" >"$BUILD_DIR/AndroidManifest.xml"
   aapt2 link -o "$BUILD_DIR/resources.ap_" -I "$platform" \
     --manifest "$BUILD_DIR/AndroidManifest.xml" \
     --version-code "$VERSION_CODE" --version-name "$VERSION_NAME" \

@@ -6,6 +6,8 @@ import android.graphics.Bitmap
 import android.graphics.Canvas
 import android.os.Build
 import android.os.Looper
+import android.view.InputDevice
+import android.view.KeyCharacterMap
 import android.view.KeyEvent
 import android.view.MotionEvent
 import android.view.View
@@ -70,7 +72,9 @@ class AppHarness(
 
     init {
         shadowOf(app).grantPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
-        if (Build.VERSION.SDK_INT >= Build.VERSION_CODES.TIRAMISU) app.applicationInfo.setEnableOnBackInvokedCallback(manifestOptsInToBackCallback())
+        if (Build.VERSION.SDK_INT >= Build.VERSION_CODES.TIRAMISU) {
+            app.applicationInfo.setEnableOnBackInvokedCallback(manifestOptsInToBackCallback())
+        }
         app.bluetoothAccess = BluetoothAccess(app)
         model = AppModel(scope + crashes, app.bluetoothAccess, sources) { host, port -> EmulatorDiscoverer(host, port) }
         app.model = model
@@ -83,7 +87,8 @@ class AppHarness(
      * that attribute, so the harness reads it from the manifest the app is built from.
      */
     private fun manifestOptsInToBackCallback(): Boolean {
-        val config = java.util.Properties().apply { AppHarness::class.java.getResourceAsStream("/com/android/tools/test_config.properties")!!.use { load(it) } }
+        val config = java.util.Properties()
+        AppHarness::class.java.getResourceAsStream("/com/android/tools/test_config.properties")!!.use { config.load(it) }
         val manifest = javax.xml.parsers.DocumentBuilderFactory.newInstance().apply { isNamespaceAware = true }
             .newDocumentBuilder().parse(File(config.getProperty("android_merged_manifest")))
         val application = manifest.getElementsByTagName("application").item(0) as org.w3c.dom.Element
@@ -114,9 +119,12 @@ class AppHarness(
      */
     suspend fun pressBack() {
         val window = root.viewRootImpl ?: throw AssertionError("the Activity's window is not on screen")
+        val down = android.os.SystemClock.uptimeMillis()
         for (action in listOf(KeyEvent.ACTION_DOWN, KeyEvent.ACTION_UP)) {
             val now = android.os.SystemClock.uptimeMillis()
-            window.dispatchInputEvent(KeyEvent(now, now, action, KeyEvent.KEYCODE_BACK, 0, 0, -1, 0, 0, android.view.InputDevice.SOURCE_KEYBOARD))
+            window.dispatchInputEvent(
+                KeyEvent(down, now, action, KeyEvent.KEYCODE_BACK, 0, 0, KeyCharacterMap.VIRTUAL_KEYBOARD, 0, 0, InputDevice.SOURCE_KEYBOARD),
+            )
             idle()
         }
         run(20.milliseconds)
