@@ -17,6 +17,7 @@ import com.github.ajalt.clikt.parameters.types.int
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.TimeoutCancellationException
 import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import org.pocketbot.emulator.cli.EmulatorCommand
 import org.pocketbot.sdk.CommandRefusedException
@@ -71,7 +72,8 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
         serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found.
 
         Exit codes: 0 ok, 1 other failure, 2 usage (also an unknown setting or field), 3 no such robot,
-        4 refused by the robot, 5 link lost, 6 firmware version mismatch, 7 timeout.
+        4 refused by the robot, 5 link lost (also a link that stays down for ${LINK_GRACE.inWholeSeconds} s: no command waits longer
+        for it), 6 firmware version mismatch, 7 timeout.
 
         Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
     """.trimIndent()
@@ -115,7 +117,8 @@ fun main(args: Array<String>) {
 
 /**
  * Runs [block] with the robots a command names connected, and disconnects them afterwards. Failures become a clear
- * line on stderr and the documented exit code.
+ * line on stderr and the documented exit code. A robot whose link stays down for [LINK_GRACE] (or closes) ends the
+ * command with exit 5: the SDK would wait for the link without end, and a command must end.
  */
 fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Boolean, block: suspend CoroutineScope.(List<Robot>, Output) -> Unit) {
     if (!all && names.isEmpty()) throw UsageError("name a robot, or use --all")
@@ -131,7 +134,10 @@ fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Bo
                 !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
             })
             robots = connectRobots(found, names, all, globals.options, progress)
-            coroutineScope { block(robots, out) } // a failure of any robot's part surfaces as itself
+            coroutineScope { // a failure of any robot's part surfaces as itself
+                val watch = launch { throw linkGone(robots) }
+                try { block(robots, out) } finally { watch.cancel() }
+            }
             out.flush()
             Exit.OK
         } catch (e: CliktError) {
