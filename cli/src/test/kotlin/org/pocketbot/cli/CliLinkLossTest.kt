@@ -39,17 +39,22 @@ class CliLinkLossTest {
         return move
     }
 
+    /** [run] (the 1.0 m move) ended with exit 5, its movement `lost`, and part of the distance as this host saw it. */
+    private fun assertLostWithTheDistanceSeen(run: Run) {
+        assertEquals(5, run.code, "$run")
+        val row = jsonLines(run.out).single()
+        assertEquals("lost", row["outcome"]!!.jsonPrimitive.content, "$run")
+        val done = row["done"]!!.jsonPrimitive.content.toDouble()
+        assertTrue(done in 0.05..0.9, "the distance the host saw the robot drive, $done m of 1.0 m: $run")
+    }
+
     @Test
     fun aMoveWaitingForARobotWhoseEmulatorWasKilledEndsWithTheDistanceItSawAndExit5() {
         val emulator = EmulatorProcess()
         val move = try { movingRobot(emulator) } finally { emulator.kill() }
         // Nothing comes back: the command gives up on its own, bounded, and says what it knows.
         val run = move.await()
-        assertEquals(5, run.code, "$run")
-        val row = jsonLines(run.out).single()
-        assertEquals("lost", row["outcome"]!!.jsonPrimitive.content, "$run")
-        val done = row["done"]!!.jsonPrimitive.content.toDouble()
-        assertTrue(done in 0.05..0.9, "the distance the host saw the robot drive, $done m of 1.0 m: $run")
+        assertLostWithTheDistanceSeen(run)
         assertTrue(run.err.contains("lost the link to PocketBot-1"), "$run")
         assertTrue(!run.err.contains("Lost(") && !run.err.contains("reason="), "no internal names: $run")
     }
@@ -61,12 +66,7 @@ class CliLinkLossTest {
         val move = try { movingRobot(emulator) } finally { emulator.kill() }
         // The robot is back at once, restarted: it has no record of the movement.
         EmulatorProcess(port).use { again ->
-            val run = move.await()
-            assertEquals(5, run.code, "$run")
-            val row = jsonLines(run.out).single()
-            assertEquals("lost", row["outcome"]!!.jsonPrimitive.content, "$run")
-            val done = row["done"]!!.jsonPrimitive.content.toDouble()
-            assertTrue(done in 0.05..0.9, "the distance the host saw the robot drive, $done m of 1.0 m: $run")
+            assertLostWithTheDistanceSeen(move.await())
             // The restarted robot serves the next command as usual.
             val info = runPocketBot(listOf("info", again.address, "--json"))
             assertEquals(0, info.code, "$info")
