@@ -106,7 +106,10 @@ private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () ->
             Text(" ${robot.name}", style = MaterialTheme.typography.bodyLarge, modifier = Modifier.weight(1f))
             TextButton(onClick = onDisconnect, modifier = Modifier.height(32.dp).testTag("disconnect-${robot.name}")) { Text("Disconnect") }
         }
-        Text("${describe(connection, trouble)} · ${robot.address}", Modifier.testTag("robot-link-${robot.name}"), style = MaterialTheme.typography.bodySmall)
+        val link = describe(connection, trouble)
+        // The address once: a failure's reason often names it already.
+        Text(if (robot.address in link) link else "$link · ${robot.address}", Modifier.testTag("robot-link-${robot.name}"),
+            style = MaterialTheme.typography.bodySmall)
         LinkCounters(robot)
     }
 }
