@@ -15,11 +15,13 @@ import org.pocketbot.protocol.ColourMode
 import org.pocketbot.sdk.CommandTimeoutException
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugMessage
+import org.pocketbot.sdk.Driving
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementHandle
 import org.pocketbot.sdk.MovementResult
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotException
 import org.pocketbot.sdk.SettingField
 import org.pocketbot.sdk.SettingRefusedException
@@ -72,7 +74,8 @@ class QueuedMovement(val handle: MovementHandle, val result: MovementResult? = n
 /**
  * One connected robot as the panel drives it: commands, settings edits with their status, the console, teleoperation
  * and tuning. Everything it does goes through the SDK's public API; failures become messages ([notify]), never
- * crashes.
+ * crashes. Another host may drive the robot ([driving]): the panel then watches it until the user takes it over
+ * ([takeOver]), and says so when the robot is taken from it, given back, or restarts.
  */
 class RobotModel(
     val robot: Robot,
@@ -113,9 +116,13 @@ class RobotModel(
     /** The link while it is down (since when, failed attempts, why), or null while it is up. */
     val linkTrouble: StateFlow<LinkTrouble?> = _linkTrouble.asStateFlow()
 
+    /** Who drives the robot: this panel, another host (by its label), or none. */
+    val driving: StateFlow<Driving> get() = robot.driving
+
     private val jobs = listOf(
         scope.launch { robot.debugLog.messages.collect(::log) },
         scope.launch { robot.connection.collect(::followLink) },
+        scope.launch { robot.events.collect(::tell) },
     )
 
     private fun log(m: DebugMessage) = _console.update { lines ->
@@ -132,6 +139,21 @@ class RobotModel(
             is ConnectionState.Closed -> LinkTrouble(t?.since ?: TimeSource.Monotonic.markNow(), t?.attempts ?: 0, c.cause?.message ?: "closed")
         }
     }
+
+    /** Takes the robot from the host that drives it (which is told); the panel drives it from then on. */
+    fun takeOver() = act("take over") { robot.takeOver() }
+
+    private fun tell(event: RobotEvent) = when (event) {
+        is RobotEvent.DriverChanged -> when {
+            event.taken -> notify("$name was taken over by ${event.driving.driver ?: "another host"}: this panel only watches it now (Take over to drive it again)", true)
+            event.driving.byThisHost -> notify("this panel drives $name", false)
+            else -> {}
+        }
+        is RobotEvent.Restarted -> notify("$name restarted: its clock went back from ${seconds(event.lastSeenTimeMs)} to ${seconds(event.timeMs)}; " +
+            "what it had queued is gone", true)
+    }
+
+    private fun seconds(ms: Long) = "%.1f s".format(ms / 1000.0)
 
     /** Queues [movement]; it shows in [movements] at once and gets its result when it ends. */
     fun enqueue(movement: Movement) = act("enqueue $movement") {

@@ -38,6 +38,7 @@ import org.pocketbot.desktop.model.LinkTrouble
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.Driving
 
 /** Finding and connecting robots, and the connected ones with their link, always in view. */
 @Composable
@@ -110,8 +111,29 @@ private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () ->
         // The address once: a failure's reason often names it already.
         Text(if (robot.address in link) link else "$link · ${robot.address}", Modifier.testTag("robot-link-${robot.name}"),
             style = MaterialTheme.typography.bodySmall)
+        Driver(robot)
         LinkCounters(robot)
     }
+}
+
+/** Who drives the robot, and while another host does, the button that takes it over. */
+@Composable
+private fun Driver(robot: RobotModel) {
+    val driving by robot.driving.collectAsState()
+    Row(verticalAlignment = Alignment.CenterVertically) {
+        Text(drivingText(driving), Modifier.weight(1f).testTag("driver-${robot.name}"), style = MaterialTheme.typography.bodySmall,
+            color = if (driving.byThisHost) MaterialTheme.colorScheme.onSurfaceVariant else MaterialTheme.colorScheme.primary)
+        if (!driving.byThisHost) {
+            TextButton(onClick = robot::takeOver, modifier = Modifier.height(32.dp).testTag("take-over-${robot.name}")) { Text("Take over") }
+        }
+    }
+}
+
+/** The panel's words for who drives a robot. */
+fun drivingText(d: Driving): String = when {
+    d.byThisHost -> "this panel drives it"
+    d.driver != null -> "watching: ${d.driver} drives it"
+    else -> "watching: no host drives it"
 }
 
 /** The part of a robot's card that keeps changing, in a scope of its own: the rest is not composed again with it. */
