@@ -83,8 +83,9 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
         serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found.
 
         Exit codes: 0 ok, 1 other failure, 2 usage (also an unknown setting or field), 3 no such robot,
-        4 refused by the robot, 5 link lost, 6 firmware version mismatch, 7 timeout, 8 driven by another host
-        (commands that change a robot need --take-over then; the others only watch it).
+        4 refused by the robot, 5 link lost (also a link that stays down for ${LINK_GRACE.inWholeSeconds} s: no command waits longer
+        for it), 6 firmware version mismatch, 7 timeout, 8 driven by another host (commands that change a robot need
+        --take-over then; the others only watch it).
 
         Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
     """.trimIndent()
@@ -138,7 +139,8 @@ fun main(args: Array<String>) {
  * Runs [block] with the robots a command names connected as [role], and says goodbye to them afterwards (the robot
  * does with what this command queued as [onLeave] says). With [mustDrive], a robot that another host drives fails
  * the command before anything is sent to any robot. Failures become a clear line on stderr and the documented exit
- * code.
+ * code. A robot whose link stays down for [LINK_GRACE] (or closes) ends the command with exit 5: the SDK would wait
+ * for the link without end, and a command must end.
  */
 fun robotCommand(
     globals: Globals, format: Format?, names: List<String>, all: Boolean, role: Role, mustDrive: Boolean, onLeave: QueueOnLeave,
@@ -162,7 +164,10 @@ fun robotCommand(
             if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
                 throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
             }
-            coroutineScope { block(robots, out) } // a failure of any robot's part surfaces as itself
+            coroutineScope { // a failure of any robot's part surfaces as itself
+                val watch = launch { throw linkGone(robots) }
+                try { block(robots, out) } finally { watch.cancel() }
+            }
             out.flush()
             Exit.OK
         } catch (e: CliktError) {
