@@ -46,7 +46,7 @@ FRAMED_SERVICE_UUID = core.UUID('8a1c3f2e-5b7d-4e06-9a41-70c4b0746201')
 ADDRESS_PREFIX = '00:B0:7B:00:00:'
 PAGE_TIMEOUT_S = 5.12  # the HCI default (0x2000 slots)
 SUPERVISION_TIMEOUT = hci.HCI_ErrorCode.CONNECTION_TIMEOUT_ERROR
-# The gateway's L2CAP MTU for the framed channel: the largest PocketBot frame is 3 + 255 + 2 bytes.
+# The gateway's L2CAP MTU for the framed channel: any PocketBot frame (at most 125 bytes) fits.
 FRAMED_MTU = 512
 LENGTH_PREFIX = struct.Struct('<H')
 
