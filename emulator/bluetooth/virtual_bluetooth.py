@@ -17,7 +17,8 @@ Standard output, one line each (ports are ephemeral and printed for the caller):
   ready
 Standard input, one command a line, each answered by one line `ok ...` or `error <why>`:
   bridge <bdaddr>   -> ok bridge <bdaddr> rfcomm <host>:<port> l2cap <host>:<port>
-  drop <bdaddr>     the radio link between gateway and robot is lost (supervision timeout on both sides)
+  drop <bdaddr> [s] the radio link between gateway and robot is lost (supervision timeout on both sides), and the
+                    robot stays out of the gateway's reach for s seconds (default 0: pages find it again at once)
   reset <index>     controller <index> power-cycles: its links are lost, it forgets everything, says nothing
   quit              (or end of input) stops everything
 """
@@ -130,6 +131,7 @@ class Bridge:
         self.mux = None
         self.connecting = asyncio.Lock()
         self.pipes = {}  # 'rfcomm' / 'l2cap' -> Pipe
+        self.out_of_reach_until = 0.0  # loop time before which pages fail, as for a robot out of range
 
     async def start(self, host):
         self.rfcomm_server = await asyncio.start_server(lambda r, w: self.serve('rfcomm', r, w), host, 0)
@@ -141,6 +143,9 @@ class Bridge:
     async def acl(self):
         async with self.connecting:
             if self.connection is None:
+                if asyncio.get_running_loop().time() < self.out_of_reach_until:
+                    raise core.ConnectionError(hci.HCI_ErrorCode.PAGE_TIMEOUT_ERROR, core.PhysicalTransport.BR_EDR,
+                                               self.address, 'hci', 'page timeout: the robot is out of reach')
                 connection = await self.device.connect(self.address, transport=core.PhysicalTransport.BR_EDR,
                                                        timeout=PAGE_TIMEOUT_S)
                 connection.on('disconnection', lambda reason: self.on_disconnection(connection, reason))
@@ -273,10 +278,11 @@ class Gateway:
             self.bridges[key] = b
         return self.bridges[key]
 
-    def drop(self, address):
+    async def drop(self, address, seconds):
         robot = self.controller.link.find_classic_controller(hci.Address(address, hci.Address.PUBLIC_DEVICE_ADDRESS))
         if robot is None or self.address not in robot.classic_connections:
             raise core.InvalidStateError(f'no link to {address}')
+        (await self.bridge(address)).out_of_reach_until = asyncio.get_running_loop().time() + seconds
         robot.on_classic_disconnected(self.address, SUPERVISION_TIMEOUT)
         self.controller.on_classic_disconnected(robot.public_address, SUPERVISION_TIMEOUT)
 
@@ -299,8 +305,8 @@ async def commands(gateway, ports):
                 b = await gateway.bridge(args[0])
                 rf, l2 = b.ports()
                 say(f'ok bridge {b.address.to_string(False)} rfcomm {gateway.host}:{rf} l2cap {gateway.host}:{l2}')
-            elif verb == 'drop' and len(args) == 1:
-                gateway.drop(args[0])
+            elif verb == 'drop' and len(args) in (1, 2):
+                await gateway.drop(args[0], float(args[1]) if len(args) == 2 else 0.0)
                 say('ok drop')
             elif verb == 'reset' and len(args) == 1:
                 ports[int(args[0]) - 1].reset()

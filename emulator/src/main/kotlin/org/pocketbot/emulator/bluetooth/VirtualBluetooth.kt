@@ -59,8 +59,13 @@ public class VirtualBluetooth private constructor(private val process: Process, 
         return Bridge(w[2], endpoint(w[4]), endpoint(w[6]))
     }
 
-    /** The radio link between the gateway and the robot at [address] is lost: both sides see a supervision timeout. */
-    public fun drop(address: String) { command("drop $address") }
+    /**
+     * The radio link between the gateway and the robot at [address] is lost: both sides see a supervision timeout.
+     * For [outOfReach] after it, the gateway's pages fail as for a robot out of range; then they reach it again.
+     */
+    public fun drop(address: String, outOfReach: kotlin.time.Duration = kotlin.time.Duration.ZERO) {
+        command("drop $address ${outOfReach.inWholeMilliseconds / 1000.0}")
+    }
 
     /** Controller [index] power-cycles: its links are lost, its state forgotten, and it says nothing to its host. */
     public fun reset(index: Int) { command("reset $index") }
