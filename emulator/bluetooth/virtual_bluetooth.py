@@ -39,10 +39,10 @@ from bumble.link import LocalLink
 from bumble.transport.common import AsyncPipeSink
 from bumble.transport.tcp_server import open_tcp_server_transport_with_socket
 
-# What the firmware serves (firmware/README.md): SPP on an RFCOMM channel, and PocketBot frames on an L2CAP PSM
+# What the firmware serves (firmware/bluetooth/bt_config.h): SPP on an RFCOMM channel, and PocketBot frames on an L2CAP PSM
 # announced by an SDP record with this service class.
 SPP_UUID = core.UUID.from_16_bits(0x1101)
-FRAMED_SERVICE_UUID = core.UUID('8a1c3f2e-5b7d-4e06-9a41-70c4b0746201')
+FRAMED_SERVICE_UUID = core.UUID('6e2a6f10-5b1e-4c3a-9a4e-70b0c4e7b001')
 # Robots' controllers are 00:B0:7B:00:00:<index>, the gateway's 00:B0:7B:00:00:00.
 ADDRESS_PREFIX = '00:B0:7B:00:00:'
 PAGE_TIMEOUT_S = 5.12  # the HCI default (0x2000 slots)

@@ -158,14 +158,14 @@ class BluetoothEndToEndTest {
         robot.settings.linePid.kp.set(1.5)
         assertEquals(1.5, valueIn(sim.settingsBytes(), "line_pid.kp"))
 
-        robot.reflector.set(SyncMode.FULL, 10.milliseconds)
+        robot.reflector.set(SyncMode.FULL, 20.milliseconds)
         val first = robot.stateUpdates.filter { it.kind == StateUpdate.Kind.FULL }.first()
         val t0 = TimeSource.Monotonic.markNow()
         val before = robot.linkStats.value.fullStates
         delay(1.seconds)
         val rate = (robot.linkStats.value.fullStates - before) / t0.elapsedNow().inWholeMilliseconds.toDouble() * 1000
-        // 97-byte states every 10 ms need 100 x ~105 bytes a second of the 11 520 the UART carries.
-        assertTrue(rate > 80, "full states at $rate/s, asked for 100/s (first at robot time ${first.timeMs} ms)")
+        // A full state every 20 ms fills about 60 % of the robot's 115200 Bd UART, Bluetooth framing and all.
+        assertTrue(rate > 45, "full states at $rate/s, asked for 50/s (first at robot time ${first.timeMs} ms)")
         assertEquals(0, robot.linkStats.value.dropped, "no frame may be dropped on a sound link")
 
         assertTruthful(drive(robot, sim, Movement.Straight(0.08, 0.1)), MovementOutcome.FINISHED)
