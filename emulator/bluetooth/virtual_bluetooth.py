@@ -58,8 +58,10 @@ log = logging.getLogger('virtual_bluetooth')
 class VirtualController(Controller):
     """A Bumble controller that behaves as a real one where PocketBot's stack depends on it: a page reaches it only
     while its host has page scan on, a connection request its host leaves unanswered is refused after the
-    Connection Accept Timeout (Bumble's would wait forever), and its ACL buffers are those of a typical BR/EDR
-    module instead of Bumble's LE-sized 27 bytes."""
+    Connection Accept Timeout (Bumble's would wait forever), HCI_Reset drops its links and scans (Bumble's keeps
+    them), and its ACL buffers are those of a typical BR/EDR module instead of Bumble's LE-sized 27 bytes.
+
+    A link it drops is reported to the peer at once, as if its supervision timeout (20 s by default) had passed."""
 
     def __init__(self, name, link, address, acl_length, acl_packets):
         super().__init__(name, link=link, public_address=address)
@@ -73,6 +75,19 @@ class VirtualController(Controller):
                 return
             asyncio.get_running_loop().call_later(CONNECTION_ACCEPT_TIMEOUT_S, self.accept_timeout, sender_address)
         super().on_lmp_packet(sender_address, packet)
+
+    def on_hci_reset_command(self, command):
+        self.drop_links()
+        self.classic_scan_enable = 0
+        return super().on_hci_reset_command(command)
+
+    def drop_links(self):
+        """Forgets every BR/EDR link without a word to its own host; each peer's controller reports it lost."""
+        for peer in list(self.classic_connections):
+            other = self.link.find_classic_controller(peer)
+            if other is not None:
+                other.on_classic_disconnected(self.public_address, SUPERVISION_TIMEOUT)
+        self.classic_connections.clear()
 
     def refuse(self, pager, reason):
         self.send_lmp_packet(pager, lmp.LmpNotAccepted(lmp.Opcode.LMP_HOST_CONNECTION_REQ, reason))
@@ -111,11 +126,7 @@ class H4Port:
 
     def reset(self):
         old = self.controller
-        for peer in list(old.classic_connections):
-            other = self.link.find_classic_controller(peer)
-            if other is not None:
-                other.on_classic_disconnected(self.address, SUPERVISION_TIMEOUT)
-        old.classic_connections.clear()
+        old.drop_links()
         old.host = None
         self.link.remove_controller(old)
         self._new_controller()
