@@ -1,0 +1,403 @@
+#include "bt_wire.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "bluetooth/h4.h"
+#include "bluetooth/hci.h"
+#include "bluetooth/l2cap.h"
+#include "bluetooth/rfcomm.h"
+#include "core/data.h"
+#include "drivers/eeprom.h"
+#include "drivers/uart.h"
+#include "hal/hal.h"
+
+wire_packet_t wire_out[64];
+int wire_out_count;
+wire_up_t wire_up;
+
+/* ---- the HAL the stack's drivers use ---- */
+
+static uint8_t eeprom[HAL_EEPROM_SIZE];
+
+void hal_uart_tx_kick(void)
+{
+}
+
+uint8_t hal_irq_save(void)
+{
+    return 0;
+}
+
+void hal_irq_restore(uint8_t saved)
+{
+    (void)saved;
+}
+
+void hal_eeprom_read(uint16_t addr, void *dst, uint16_t len)
+{
+    memcpy(dst, eeprom + addr, len);
+}
+
+bool hal_eeprom_busy(void)
+{
+    return false;
+}
+
+void hal_eeprom_write_page(uint16_t addr, const void *src, uint8_t len)
+{
+    memcpy(eeprom + addr, src, len);
+}
+
+/* ---- the robot ---- */
+
+bool wire_echo;
+
+void wire_reset(void)
+{
+    memset(eeprom, 0xFF, sizeof eeprom);
+    memset(&robot_state, 0, sizeof robot_state);
+    memset(&settings, 0, sizeof settings);
+    memset(&wire_up, 0, sizeof wire_up);
+    settings.identity.robot_id = 7;
+    uart_init();
+    eeprom_init();
+    hci_init();
+    l2cap_init();
+    rfcomm_init();
+    wire_clear();
+}
+
+static void tick(void)
+{
+    robot_state.time.time_ms++;
+    hci_task();
+    l2cap_task();
+    rfcomm_task();
+    eeprom_task();
+}
+
+void wire_run_ms(int ms)
+{
+    while (ms-- > 0)
+        tick();
+}
+
+/* ---- controller to robot ---- */
+
+void wire_feed(const uint8_t *p, uint16_t n)
+{
+    while (n--)
+        uart_rx_isr(*p++);
+}
+
+void wire_event(uint8_t code, const uint8_t *params, uint8_t n)
+{
+    uint8_t h[3] = {H4_EVENT, code, n};
+    wire_feed(h, 3);
+    wire_feed(params, n);
+}
+
+void wire_command_complete(uint16_t opcode, const uint8_t *ret, uint8_t n)
+{
+    uint8_t p[64] = {1, (uint8_t)opcode, (uint8_t)(opcode >> 8), 0};
+    if (n)
+        memcpy(p + 4, ret, n);
+    wire_event(0x0E, p, (uint8_t)(4 + n));
+}
+
+void wire_acl(uint16_t handle, uint8_t pb, const uint8_t *p, uint16_t n)
+{
+    uint16_t hf = (uint16_t)(handle | (pb << 12));
+    uint8_t h[5] = {H4_ACL, (uint8_t)hf, (uint8_t)(hf >> 8), (uint8_t)n, (uint8_t)(n >> 8)};
+    wire_feed(h, 5);
+    wire_feed(p, n);
+}
+
+void wire_l2cap(uint16_t handle, uint16_t cid, const uint8_t *p, uint16_t n)
+{
+    uint8_t pdu[600] = {(uint8_t)n, (uint8_t)(n >> 8), (uint8_t)cid, (uint8_t)(cid >> 8)};
+    memcpy(pdu + 4, p, n);
+    wire_acl(handle, 2, pdu, (uint16_t)(n + 4));
+}
+
+/* ---- robot to controller ---- */
+
+static struct {
+    uint8_t buf[400];
+    uint16_t got, need;
+    bool body; /* the header was read: need counts the whole packet */
+} parse;
+
+static void parsed(void)
+{
+    if (wire_out_count >= (int)(sizeof wire_out / sizeof wire_out[0]))
+        return;
+    wire_packet_t *w = &wire_out[wire_out_count++];
+    const uint8_t *b = parse.buf;
+    w->type = b[0];
+    if (b[0] == H4_COMMAND) {
+        w->opcode = (uint16_t)(b[1] | (b[2] << 8));
+        w->len = b[3];
+        memcpy(w->data, b + 4, w->len > sizeof w->data ? sizeof w->data : w->len);
+    } else {
+        w->handle = (uint16_t)(b[1] | (b[2] << 8));
+        w->len = (uint16_t)(b[3] | (b[4] << 8));
+        memcpy(w->data, b + 5, w->len > sizeof w->data ? sizeof w->data : w->len);
+    }
+}
+
+static void parse_byte(uint8_t b)
+{
+    if (parse.got < sizeof parse.buf)
+        parse.buf[parse.got] = b;
+    parse.got++;
+    if (parse.got == 1) {
+        parse.need = b == H4_COMMAND ? 4 : 5;
+        parse.body = false;
+        return;
+    }
+    if (parse.got < parse.need)
+        return;
+    if (!parse.body) {
+        uint16_t len = parse.buf[0] == H4_COMMAND ? parse.buf[3] : (uint16_t)(parse.buf[3] | (parse.buf[4] << 8));
+        parse.need = (uint16_t)(parse.need + len);
+        parse.body = true;
+        if (len)
+            return;
+    }
+    parsed();
+    parse.got = 0;
+}
+
+int wire_collect(void)
+{
+    int16_t b;
+    while ((b = uart_tx_isr()) >= 0)
+        parse_byte((uint8_t)b);
+    return wire_out_count;
+}
+
+void wire_clear(void)
+{
+    wire_collect();
+    wire_out_count = 0;
+}
+
+const wire_packet_t *wire_find_command(uint16_t opcode, int n)
+{
+    wire_collect();
+    for (int i = 0; i < wire_out_count; i++)
+        if (wire_out[i].type == H4_COMMAND && wire_out[i].opcode == opcode && n-- == 0)
+            return &wire_out[i];
+    return NULL;
+}
+
+const uint8_t *wire_find_l2cap(uint16_t handle, uint16_t cid, int n, uint16_t *len)
+{
+    static uint8_t pdu[1024];
+    uint16_t got = 0, total = 0;
+    wire_collect();
+    for (int i = 0; i < wire_out_count; i++) {
+        const wire_packet_t *w = &wire_out[i];
+        if (w->type != H4_ACL || (w->handle & 0x0FFF) != handle)
+            continue;
+        if (((w->handle >> 12) & 3) != 1)
+            got = 0;
+        memcpy(pdu + got, w->data, w->len);
+        got = (uint16_t)(got + w->len);
+        if (got < 4)
+            continue;
+        total = (uint16_t)(4 + (pdu[0] | (pdu[1] << 8)));
+        if (got < total)
+            continue;
+        got = 0;
+        if ((pdu[2] | (pdu[3] << 8)) == cid && n-- == 0) {
+            *len = (uint16_t)(total - 4);
+            return pdu + 4;
+        }
+    }
+    return NULL;
+}
+
+/* ---- a controller that answers what a Bumble controller would ---- */
+
+static int answered;
+
+void wire_answer_commands(uint16_t acl_mtu, uint16_t acl_count)
+{
+    wire_collect();
+    for (; answered < wire_out_count; answered++) {
+        const wire_packet_t *w = &wire_out[answered];
+        if (w->type != H4_COMMAND)
+            continue;
+        if (w->opcode == 0x1005) { /* Read_Buffer_Size */
+            uint8_t r[7] = {(uint8_t)acl_mtu, (uint8_t)(acl_mtu >> 8), 0, (uint8_t)acl_count,
+                            (uint8_t)(acl_count >> 8), 0, 0};
+            wire_command_complete(w->opcode, r, 7);
+        } else if (w->opcode == 0x1009) { /* Read_BD_ADDR */
+            static const uint8_t addr[6] = {0x0F, 0x0E, 0x0D, 0x0C, 0x0B, 0x0A};
+            wire_command_complete(w->opcode, addr, 6);
+        } else if ((w->opcode >> 10) == 0x01) { /* link control: Command Status */
+            uint8_t s[4] = {0, 1, (uint8_t)w->opcode, (uint8_t)(w->opcode >> 8)};
+            wire_event(0x0F, s, 4);
+        } else {
+            wire_command_complete(w->opcode, NULL, 0);
+        }
+    }
+}
+
+void wire_bring_up(uint16_t acl_mtu, uint16_t acl_count)
+{
+    wire_reset();
+    answered = 0;
+    for (int i = 0; i < 40 && !hci_ready(); i++) {
+        wire_run_ms(1);
+        wire_answer_commands(acl_mtu, acl_count);
+    }
+    wire_run_ms(1);
+    wire_clear();
+    answered = 0;
+}
+
+void wire_connect(const uint8_t addr[6], uint16_t handle)
+{
+    uint8_t req[10] = {0};
+    memcpy(req, addr, 6);
+    req[9] = 0x01;
+    wire_event(0x04, req, 10);
+    wire_run_ms(1);
+    wire_collect();
+    answered = wire_out_count; /* the accept is answered here */
+    uint8_t st[4] = {0, 1, 0x09, 0x04};
+    wire_event(0x0F, st, 4);
+    uint8_t done[11] = {0, (uint8_t)handle, (uint8_t)(handle >> 8)};
+    memcpy(done + 3, addr, 6);
+    done[9] = 0x01;
+    wire_event(0x03, done, 11);
+    wire_run_ms(1);
+}
+
+/* ---- the stack's hooks ---- */
+
+void bt_stream_opened(uint8_t link)
+{
+    wire_up.stream_opened[link]++;
+}
+
+void bt_stream_rx(uint8_t link, const uint8_t *p, uint16_t n)
+{
+    if (wire_echo) { /* echo */
+        uint16_t room = rfcomm_tx_room(link);
+        rfcomm_write(link, p, n > room ? room : n);
+        return;
+    }
+    if (wire_up.stream_rx_len[link] + n <= (int)sizeof wire_up.stream_rx[link]) {
+        memcpy(wire_up.stream_rx[link] + wire_up.stream_rx_len[link], p, n);
+        wire_up.stream_rx_len[link] += n;
+    }
+}
+
+void bt_stream_closed(uint8_t link, bool lost)
+{
+    wire_up.stream_closed[link]++;
+    wire_up.stream_lost[link] += lost;
+}
+
+void bt_framed_opened(uint8_t link)
+{
+    wire_up.framed_opened[link]++;
+}
+
+void bt_framed_rx(uint8_t link, const uint8_t *p, uint16_t n)
+{
+    wire_up.framed_sdus[link]++;
+    if (wire_echo) { /* echo, if there is room */
+        if (l2cap_can_send(link, L2CAP_FRAMED, n, true)) {
+            l2cap_begin(link, L2CAP_FRAMED, n);
+            hci_acl_put(p, n);
+            hci_acl_end();
+        }
+        return;
+    }
+    if (n <= sizeof wire_up.framed_rx[link]) {
+        memcpy(wire_up.framed_rx[link], p, n);
+        wire_up.framed_rx_len[link] = n;
+    }
+}
+
+void bt_framed_closed(uint8_t link, bool lost)
+{
+    wire_up.framed_closed[link]++;
+    wire_up.framed_lost[link] += lost;
+}
+
+/* ---- live: the stack against a controller over TCP, in real time ---- */
+
+static uint64_t now_us(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (uint64_t)t.tv_sec * 1000000u + (uint64_t)t.tv_nsec / 1000u;
+}
+
+int wire_live(int port, int seconds)
+{
+    int s = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {0};
+    a.sin_family = AF_INET;
+    a.sin_port = htons((uint16_t)port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (s < 0 || connect(s, (struct sockaddr *)&a, sizeof a) != 0) {
+        perror("connect");
+        return 1;
+    }
+    int one = 1;
+    setsockopt(s, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    fcntl(s, F_SETFL, O_NONBLOCK);
+    wire_reset();
+    wire_echo = true;
+    uint64_t start = now_us(), next = start;
+    static uint8_t in[4096]; /* what the controller sent, fed to the UART at its baud rate */
+    size_t in_len = 0, in_pos = 0;
+    while (now_us() - start < (uint64_t)seconds * 1000000u) {
+        if (in_pos == in_len)
+            in_pos = in_len = 0;
+        ssize_t n = in_len < sizeof in ? read(s, in + in_len, sizeof in - in_len) : -1;
+        if (n == 0)
+            break; /* the controller went away */
+        if (n > 0)
+            in_len += (size_t)n;
+        else if (errno != EAGAIN && in_len < sizeof in)
+            break;
+        if (now_us() >= next) {
+            next += 1000;
+            /* 115200 Bd: about 12 bytes per ms each way */
+            size_t k = in_len - in_pos > 12 ? 12 : in_len - in_pos;
+            wire_feed(in + in_pos, (uint16_t)k);
+            in_pos += k;
+            tick();
+            uint8_t out[12];
+            int m = 0;
+            int16_t b;
+            while (m < 12 && (b = uart_tx_isr()) >= 0)
+                out[m++] = (uint8_t)b;
+            if (m && write(s, out, (size_t)m) != m)
+                break;
+        } else {
+            usleep(100);
+        }
+    }
+    close(s);
+    printf("live: wire %u timeouts %u resets %u dropped %u\n", robot_state.errors.bt_wire,
+           robot_state.errors.bt_timeouts, robot_state.errors.bt_resets, robot_state.errors.bt_dropped);
+    return 0;
+}
