@@ -286,6 +286,79 @@ void wire_connect(const uint8_t addr[6], uint16_t handle)
     wire_run_ms(1);
 }
 
+uint16_t wire_open_l2cap(uint16_t handle, uint16_t psm, uint16_t scid, uint16_t mtu)
+{
+    static uint8_t id = 0x20;
+    int before = wire_collect();
+    uint8_t req[8] = {0x02, ++id, 4, 0, (uint8_t)psm, (uint8_t)(psm >> 8), (uint8_t)scid, (uint8_t)(scid >> 8)};
+    wire_l2cap(handle, 1, req, sizeof req);
+    wire_run_ms(1);
+    uint16_t dcid = 0;
+    uint8_t our_id = 0;
+    const uint8_t *q;
+    uint16_t n;
+    for (int k = 0; (q = wire_find_l2cap(handle, 1, k, &n)); k++) {
+        if (q[0] == 0x03 && q[1] == id)
+            dcid = (uint16_t)(q[4] | (q[5] << 8));
+        if (q[0] == 0x04)
+            our_id = q[1];
+    }
+    (void)before;
+    if (dcid == 0)
+        return 0;
+    uint8_t cfg[12] = {0x04, ++id, 8, 0, (uint8_t)dcid, (uint8_t)(dcid >> 8), 0, 0, 0x01, 2, (uint8_t)mtu,
+                       (uint8_t)(mtu >> 8)};
+    wire_l2cap(handle, 1, cfg, sizeof cfg);
+    uint8_t rsp[10] = {0x05, our_id, 6, 0, (uint8_t)dcid, (uint8_t)(dcid >> 8), 0, 0, 0, 0};
+    wire_l2cap(handle, 1, rsp, sizeof rsp);
+    wire_run_ms(1);
+    return dcid;
+}
+
+uint8_t wire_fcs(const uint8_t *p, int n)
+{
+    uint8_t crc = 0xFF;
+    while (n--) {
+        crc ^= *p++;
+        for (int i = 0; i < 8; i++)
+            crc = (uint8_t)(crc & 1 ? (crc >> 1) ^ 0xE0 : crc >> 1);
+    }
+    return (uint8_t)(0xFF - crc);
+}
+
+void wire_rfcomm(uint16_t handle, uint16_t cid, uint8_t dlci, uint8_t ctrl, const uint8_t *info, uint8_t n,
+                 int credits)
+{
+    uint8_t f[300];
+    int k = 0;
+    f[k++] = (uint8_t)(dlci << 2 | 0x02 | 1); /* initiator: C/R 1 on commands */
+    f[k++] = credits > 0 ? (uint8_t)(ctrl | 0x10) : ctrl;
+    f[k++] = (uint8_t)(n << 1 | 1);
+    if (credits > 0)
+        f[k++] = (uint8_t)credits;
+    if (n)
+        memcpy(f + k, info, n);
+    k += n;
+    f[k] = wire_fcs(f, (ctrl & ~0x10) == 0xEF ? 2 : 3);
+    wire_l2cap(handle, cid, f, (uint16_t)(k + 1));
+}
+
+uint16_t wire_open_rfcomm(uint16_t handle, uint8_t credits, uint16_t n1)
+{
+    uint16_t cid = wire_open_l2cap(handle, 3, 0x0050, 1021);
+    wire_rfcomm(handle, cid, 0, 0x3F, NULL, 0, 0); /* SABM, P */
+    uint8_t pn[10] = {0x83, 0x11, 2, 0xF0, 0, 0, (uint8_t)n1, (uint8_t)(n1 >> 8), 0, credits};
+    wire_rfcomm(handle, cid, 0, 0xEF, pn, 10, 0);
+    wire_rfcomm(handle, cid, 2, 0x3F, NULL, 0, 0);
+    wire_run_ms(2);
+    return cid;
+}
+
+const uint8_t *wire_find_rfcomm(uint16_t handle, int n, uint16_t *len)
+{
+    return wire_find_l2cap(handle, 0x0050, n, len);
+}
+
 /* ---- the stack's hooks ---- */
 
 void bt_stream_opened(uint8_t link)

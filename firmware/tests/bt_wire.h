@@ -63,6 +63,21 @@ void wire_bring_up(uint16_t acl_mtu, uint16_t acl_count);
 /** A peer at `addr` connects (connection request, accepted, complete) on `handle`. */
 void wire_connect(const uint8_t addr[6], uint16_t handle);
 
+/** Opens an L2CAP channel to `psm` from the peer's channel `scid` on `handle` (connection and configuration both
+ *  ways, the peer's MTU `mtu`). \return the robot's channel id, 0 if it refused. */
+uint16_t wire_open_l2cap(uint16_t handle, uint16_t psm, uint16_t scid, uint16_t mtu);
+/** An RFCOMM frame from the peer (the initiator) on the channel `cid`: address from `dlci` (C/R as a command,
+ *  or as a response when `response`), `ctrl`, information, credits when `credits` > 0 (UIH with P/F). */
+void wire_rfcomm(uint16_t handle, uint16_t cid, uint8_t dlci, uint8_t ctrl, const uint8_t *info, uint8_t n,
+                 int credits);
+/** Opens RFCOMM from the peer: L2CAP channel (peer cid 0x0050), SABM on DLCI 0, PN with credit-based flow control
+ *  (`credits` initial credits, N1 `n1`), SABM on DLCI 2. \return the robot's L2CAP channel id. */
+uint16_t wire_open_rfcomm(uint16_t handle, uint8_t credits, uint16_t n1);
+/** The RFCOMM frames the robot sent on the peer's channel 0x0050 of `handle`: the n-th one (NULL if none). */
+const uint8_t *wire_find_rfcomm(uint16_t handle, int n, uint16_t *len);
+/** TS 07.10's FCS of `n` bytes. */
+uint8_t wire_fcs(const uint8_t *p, int n);
+
 /* ---- the stack's upward hooks, recorded ---- */
 typedef struct {
     int stream_opened[2], stream_closed[2], stream_lost[2];
