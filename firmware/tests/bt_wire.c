@@ -20,7 +20,7 @@
 #include "drivers/uart.h"
 #include "hal/hal.h"
 
-wire_packet_t wire_out[64];
+wire_packet_t wire_out[256];
 int wire_out_count;
 wire_up_t wire_up;
 
@@ -67,6 +67,7 @@ void wire_reset(void)
     memset(&robot_state, 0, sizeof robot_state);
     memset(&settings, 0, sizeof settings);
     memset(&wire_up, 0, sizeof wire_up);
+    wire_uart_bytes_per_ms = 0;
     settings.identity.robot_id = 7;
     uart_init();
     eeprom_init();
@@ -76,6 +77,10 @@ void wire_reset(void)
     wire_clear();
 }
 
+int wire_uart_bytes_per_ms = 0;
+
+static void parse_byte(uint8_t b);
+
 static void tick(void)
 {
     robot_state.time.time_ms++;
@@ -83,6 +88,9 @@ static void tick(void)
     l2cap_task();
     rfcomm_task();
     eeprom_task();
+    int16_t b;
+    for (int k = 0; k < wire_uart_bytes_per_ms && (b = uart_tx_isr()) >= 0; k++)
+        parse_byte((uint8_t)b);
 }
 
 void wire_run_ms(int ms)

@@ -18,6 +18,9 @@
 void wire_reset(void);
 /** Runs the stack's tasks for `ms` milliseconds of robot time (one pass per ms). */
 void wire_run_ms(int ms);
+/** Bytes the UART sends (into the collected packets) per ms of wire_run_ms(); 0 (after wire_reset()): none, the
+ *  test collects with wire_collect(). 12 is the 115200 Bd wire. */
+extern int wire_uart_bytes_per_ms;
 
 /* ---- controller to robot ---- */
 
@@ -45,7 +48,7 @@ typedef struct {
 
 /** Takes what the robot sent into a list of packets (appended); \return how many are listed. */
 int wire_collect(void);
-extern wire_packet_t wire_out[64];
+extern wire_packet_t wire_out[256];
 extern int wire_out_count;
 /** Forgets the packets collected. */
 void wire_clear(void);
