@@ -194,10 +194,13 @@ int wire_collect(void)
     return wire_out_count;
 }
 
+static int answered; /* commands of wire_out answered by wire_answer_commands() */
+
 void wire_clear(void)
 {
     wire_collect();
     wire_out_count = 0;
+    answered = 0;
 }
 
 const wire_packet_t *wire_find_command(uint16_t opcode, int n)
@@ -237,8 +240,6 @@ const uint8_t *wire_find_l2cap(uint16_t handle, uint16_t cid, int n, uint16_t *l
 }
 
 /* ---- a controller that answers what a Bumble controller would ---- */
-
-static int answered;
 
 void wire_answer_commands(uint16_t acl_mtu, uint16_t acl_count)
 {

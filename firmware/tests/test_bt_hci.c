@@ -284,4 +284,3 @@ void suite_bt_hci(void)
     RUN(the_local_name_follows_the_robot_id);
     RUN(data_for_an_unknown_handle_is_dropped);
 }
-void suite_bt_rfcomm(void) {}
