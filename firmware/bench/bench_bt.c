@@ -71,7 +71,8 @@ static void rfcomm(uint8_t dlci, uint8_t ctrl, const uint8_t *info, uint8_t n, u
     f[k++] = (uint8_t)(n << 1 | 1);
     if (credits)
         f[k++] = credits;
-    memcpy(f + k, info, n);
+    if (n)
+        memcpy(f + k, info, n);
     k = (uint8_t)(k + n);
     f[k] = fcs(f, (ctrl & 0xEF) == 0xEF ? 2 : 3);
     l2cap(robot_cid, f, (uint8_t)(k + 1));
@@ -100,12 +101,11 @@ static void answer(uint16_t op)
 
 static void robot_byte(uint8_t b)
 {
-    if (in_got < 5) {
+    if (in_got == 0 || in_got < (in_hdr[0] == 0x01 ? 4u : 5u)) { /* a command's header is 4 bytes, ACL's 5 */
         in_hdr[in_got++] = b;
-        if (in_got == (in_hdr[0] == 0x01 ? 4u : 5u))
-            in_need = in_hdr[0] == 0x01 ? in_hdr[3] : (uint16_t)(in_hdr[3] | in_hdr[4] << 8);
-        else
+        if (in_got < (in_hdr[0] == 0x01 ? 4u : 5u))
             return;
+        in_need = in_hdr[0] == 0x01 ? in_hdr[3] : (uint16_t)(in_hdr[3] | in_hdr[4] << 8);
     } else {
         uint16_t at = (uint16_t)(in_got - 5u);
         if (in_hdr[0] == 0x02 && ((in_hdr[2] >> 4) & 3) == 2 && at >= 2 && at < 6)

@@ -5,7 +5,6 @@
 #include "bluetooth/l2cap.h"
 #include "bluetooth/rfcomm.h"
 #include "modules/comm.h"
-#include "pb_protocol.h"
 
 _Static_assert(BT_LINKS <= COMM_LINKS, "every Bluetooth link is a host link of comm");
 
@@ -23,11 +22,10 @@ static void stream_write(uint8_t link, const uint8_t *p, uint16_t n)
 /* The framed channel: one frame per SDU, written straight into the transmit ring. */
 static uint16_t framed_room(uint8_t link)
 {
-    uint16_t n = PB_FRAME_HEADER_SIZE + PB_MAX_PAYLOAD + PB_FRAME_CRC_SIZE;
-    uint16_t mtu = l2cap_peer_mtu(link, L2CAP_FRAMED);
-    if (n > mtu)
-        n = mtu;
-    return l2cap_can_send(link, L2CAP_FRAMED, n, true) ? n : 0;
+    uint16_t n = l2cap_peer_mtu(link, L2CAP_FRAMED);
+    uint16_t room = hci_acl_room(true);
+    room = room > 4u ? (uint16_t)(room - 4u) : 0; /* the L2CAP header */
+    return n < room ? n : room;
 }
 
 static void framed_write(uint8_t link, const uint8_t *p, uint16_t n)

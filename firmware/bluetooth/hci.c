@@ -58,7 +58,6 @@ static const HAL_FLASH uint16_t init_ops[] = {
 /* The default events and Secure Simple Pairing's (IO capability request/response, user confirmation and passkey,
  * OOB, simple pairing complete: bits 48..53). */
 static const HAL_FLASH uint8_t event_mask[8] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x1F, 0x3F, 0x00};
-static const HAL_FLASH char name_prefix[] = BT_NAME_PREFIX;
 
 /* Answers to the controller's requests, sent as command credits allow. */
 enum { REPLY_ACCEPT, REPLY_REJECT, REPLY_LINK_KEY, REPLY_PIN_NEGATIVE, REPLY_IO_CAPABILITY, REPLY_USER_CONFIRM,
@@ -285,6 +284,8 @@ static bool command(uint16_t op, const uint8_t *params, uint8_t len)
 
 static bool write_local_name(void)
 {
+    /* Without its NUL: avr-gcc 5.4's LTO fails on two equal __flash strings (settings.c has this one). */
+    static const HAL_FLASH char name_prefix[sizeof BT_NAME_PREFIX - 1u] = BT_NAME_PREFIX;
     if (h4_tx_room() < 4u + NAME_LEN)
         return false;
     uint8_t id = settings.identity.robot_id;
@@ -294,12 +295,13 @@ static bool write_local_name(void)
         digits[n++] = (char)('0' + id % 10u);
         id /= 10u;
     } while (id);
-    uint8_t prefix = sizeof name_prefix - 1u;
+    uint8_t prefix = sizeof name_prefix;
     h4_tx_begin();
     h4_tx_byte(H4_COMMAND);
     h4_tx_u16(OP_WRITE_LOCAL_NAME);
     h4_tx_byte((uint8_t)NAME_LEN);
-    h4_tx_flash((const HAL_FLASH uint8_t *)name_prefix, prefix);
+    for (uint8_t k = 0; k < prefix; k++)
+        h4_tx_byte((uint8_t)name_prefix[k]);
     for (uint8_t k = n; k;)
         h4_tx_byte((uint8_t)digits[--k]);
     h4_tx_zeros((uint16_t)(NAME_LEN - prefix - n));
@@ -666,6 +668,26 @@ bool hci_acl_can_send(uint16_t len, bool data)
     uint8_t spare = data && acl_total > 2u ? 1u : 0u;
     uint16_t bytes = (uint16_t)(len + FRAGMENT_HEADER * frags + (data ? HCI_TX_RESERVE : 0u));
     return (uint16_t)(frags + spare) <= acl_free && bytes <= h4_tx_room();
+}
+
+uint16_t hci_acl_room(bool data)
+{
+    if (state != ST_READY)
+        return 0;
+    uint16_t bytes = h4_tx_room();
+    uint8_t spare = data && acl_total > 2u ? 1u : 0u;
+    if (data)
+        bytes = bytes > HCI_TX_RESERVE ? (uint16_t)(bytes - HCI_TX_RESERVE) : 0;
+    uint16_t best = 0;
+    for (uint8_t f = 1; (uint16_t)(f + spare) <= acl_free && FRAGMENT_HEADER * f < bytes; f++) {
+        uint16_t len = (uint16_t)(bytes - FRAGMENT_HEADER * f);
+        if (len > (uint32_t)f * acl_mtu)
+            len = (uint16_t)(f * acl_mtu);
+        if (len <= (uint32_t)(f - 1u) * acl_mtu)
+            break; /* the headers of one more fragment cost more than it carries */
+        best = len;
+    }
+    return best;
 }
 
 static void fragment_header(uint16_t flags)

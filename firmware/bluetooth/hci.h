@@ -63,6 +63,8 @@ void hci_disconnect(uint8_t link);
  *         HCI_TX_RESERVE bytes and one buffer for answers.
  */
 bool hci_acl_can_send(uint16_t len, bool data);
+/** \return the longest PDU that hci_acl_can_send() would take now (`data` as there). */
+uint16_t hci_acl_room(bool data);
 /** Starts a PDU of `len` bytes on `link` (after hci_acl_can_send()); then exactly `len` bytes of hci_acl_put*(). */
 void hci_acl_begin(uint8_t link, uint16_t len);
 void hci_acl_put(const uint8_t *p, uint16_t n);

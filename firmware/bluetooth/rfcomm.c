@@ -31,8 +31,7 @@
 #define V24_READY 0x8Du /* EA, RTC, RTR, DV */
 #define OVERHEAD 6u     /* address, control, two length bytes, credits, FCS */
 
-_Static_assert(RFCOMM_TX_SIZE == 128u, "ring indices wrap with a mask");
-#define MASK (RFCOMM_TX_SIZE - 1u)
+_Static_assert(RFCOMM_TX_SIZE == 256u, "one-byte ring indices wrap by themselves");
 
 /* FCS of TS 07.10: CRC-8, reversed polynomial x^8 + x^2 + x + 1. */
 static const HAL_FLASH uint8_t crc_table[256] = {
@@ -309,7 +308,7 @@ uint16_t rfcomm_tx_room(uint8_t link)
 {
     if (!rs[link].dlc)
         return 0;
-    return (uint8_t)(MASK - ((rs[link].head - rs[link].tail) & MASK));
+    return (uint8_t)(rs[link].tail - rs[link].head - 1u);
 }
 
 void rfcomm_write(uint8_t link, const uint8_t *p, uint16_t n)
@@ -317,8 +316,7 @@ void rfcomm_write(uint8_t link, const uint8_t *p, uint16_t n)
     uint8_t h = rs[link].head;
     uint8_t *buf = rs[link].buf;
     while (n--) {
-        buf[h] = *p++;
-        h = (uint8_t)((h + 1u) & MASK);
+        buf[h++] = *p++;
     }
     rs[link].head = h;
 }
@@ -330,13 +328,13 @@ static bool send_data(uint8_t link, uint8_t n, uint8_t give)
     if (!frame_begin(link, addr, ctrl, n, give, n != 0))
         return false;
     uint8_t t = rs[link].tail;
-    uint8_t first = (uint8_t)(RFCOMM_TX_SIZE - t);
+    uint16_t first = (uint16_t)(RFCOMM_TX_SIZE - t);
     if (first > n)
         first = n;
     hci_acl_put(rs[link].buf + t, first);
     hci_acl_put(rs[link].buf, (uint16_t)(n - first));
     frame_end(addr, ctrl);
-    rs[link].tail = (uint8_t)((t + n) & MASK);
+    rs[link].tail = (uint8_t)(t + n);
     rs[link].rx_credits = (uint8_t)(rs[link].rx_credits + give);
     if (n && rs[link].cbfc)
         rs[link].tx_credits--;
@@ -354,7 +352,7 @@ static void link_task(uint8_t link)
     uint8_t give = 0;
     if (rs[link].cbfc && rs[link].rx_credits <= RFCOMM_RX_CREDITS / 2u)
         give = (uint8_t)(RFCOMM_RX_CREDITS - rs[link].rx_credits);
-    uint8_t staged = (uint8_t)((rs[link].head - rs[link].tail) & MASK);
+    uint8_t staged = (uint8_t)(rs[link].head - rs[link].tail);
     uint16_t max = l2cap_peer_mtu(link, L2CAP_RFCOMM);
     max = max > OVERHEAD ? (uint16_t)(max - OVERHEAD) : 0;
     if (max > rs[link].n1)

@@ -15,8 +15,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-/** Bytes staged per link for sending. */
-#define RFCOMM_TX_SIZE 128u
+/** Bytes staged per link for sending: a full state packet SLIP-encoded at its worst (comm's room check). */
+#define RFCOMM_TX_SIZE 256u
 /** Credits the robot grants the peer (frames it may send before more are given). */
 #define RFCOMM_RX_CREDITS 7u
 /** A partial frame goes out when fewer bytes than this wait for the UART (it is about to run dry). */

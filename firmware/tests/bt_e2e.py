@@ -2,6 +2,7 @@
 """The firmware's Bluetooth stack against Bumble's virtual controllers, end to end.
 
     bt_e2e.py ROBOT_PROGRAM [--trace FILE]
+    bt_e2e.py --firmware BT_ROBOT_PROGRAM
 
 Starts two virtual BR/EDR controllers on one Bumble LocalLink: the robot's, reached as an H4 byte stream on a
 loopback TCP port (port 0: the system picks one), and a peer's, driven by a Bumble host in this process. It runs
@@ -13,6 +14,9 @@ wire with their direction and time (the source of tests/bt_traces.h). Exit statu
 """
 import argparse
 import asyncio
+import pathlib
+import re
+import struct
 import subprocess
 import sys
 import time
@@ -159,9 +163,104 @@ def write_trace_c(path, trace):
         f.write("\n".join(lines))
 
 
+# ---- the PocketBot protocol, as much as the check needs ----
+
+PKT_HELLO, PKT_STATE_FULL, PKT_HELLO_REQUEST = 0x01, 0x02, 0x10
+SLIP_END, SLIP_ESC = 0xC0, 0xDB
+
+
+def protocol_version():
+    header = pathlib.Path(__file__).resolve().parent.parent / "protocol" / "pb_protocol.h"
+    return int(re.search(r"#define PB_PROTOCOL_VERSION (\d+)", header.read_text()).group(1))
+
+
+def crc16(data):
+    crc = 0xFFFF
+    for b in data:
+        crc ^= b << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+    return crc
+
+
+def frame(kind, seq, payload):
+    body = bytes([kind, seq, len(payload)]) + payload
+    return body + struct.pack("<H", crc16(body))
+
+
+def slip(data):
+    out = bytearray([SLIP_END])
+    for b in data:
+        out += bytes([SLIP_ESC, 0xDC]) if b == SLIP_END else bytes([SLIP_ESC, 0xDD]) if b == SLIP_ESC else bytes([b])
+    out.append(SLIP_END)
+    return bytes(out)
+
+
+class SlipFrames:
+    """Frames out of a SLIP byte stream, each checked."""
+
+    def __init__(self):
+        self.buf, self.frames = bytearray(), []
+
+    def feed(self, data):
+        for b in data:
+            if b != SLIP_END:
+                self.buf.append(b)
+                continue
+            raw = bytes(self.buf).replace(bytes([SLIP_ESC, 0xDC]), bytes([SLIP_END])).replace(
+                bytes([SLIP_ESC, 0xDD]), bytes([SLIP_ESC]))
+            self.buf.clear()
+            if len(raw) >= 5 and crc16(raw[:-2]) == struct.unpack("<H", raw[-2:])[0]:
+                self.frames.append(raw)
+
+
+def kinds(frames):
+    return [f[0] for f in frames]
+
+
+async def firmware_over_rfcomm(device, name, done):
+    conn = await device.connect(ROBOT_ADDRESS, transport=core.PhysicalTransport.BR_EDR)
+    await conn.authenticate()
+    channel = await rfcomm.find_rfcomm_channel_with_uuid(conn, SPP_UUID)
+    mux = await rfcomm.Client(conn).start()
+    dlc = await mux.open_dlc(channel)
+    rx = SlipFrames()
+    dlc.sink = rx.feed
+    dlc.write(slip(frame(PKT_HELLO_REQUEST, 0, struct.pack("<HI", protocol_version(), 0x5EED0001))))
+    await wait_for(lambda: PKT_HELLO in kinds(rx.frames), 5, f"{name}: no hello over RFCOMM")
+    hello = next(f for f in rx.frames if f[0] == PKT_HELLO)
+    assert hello[3] == 7, f"{name}: hello from robot {hello[3]}"
+    await wait_for(lambda: kinds(rx.frames).count(PKT_STATE_FULL) >= 3, 5, f"{name}: no state over RFCOMM")
+    await done.wait()  # the other peer has its state too
+    await dlc.disconnect()
+    await mux.disconnect()
+    await conn.disconnect()
+    return True
+
+
+async def firmware_over_l2cap(device, name, done):
+    conn = await device.connect(ROBOT_ADDRESS, transport=core.PhysicalTransport.BR_EDR)
+    await conn.authenticate()
+    l2 = await conn.create_l2cap_channel(spec=l2cap.ClassicChannelSpec(psm=PSM_FRAMED, mtu=200))
+    sdus = []
+    l2.sink = sdus.append
+    l2.write(frame(PKT_HELLO_REQUEST, 0, struct.pack("<HI", protocol_version(), 0x5EED0002)))
+    await wait_for(lambda: PKT_HELLO in kinds(sdus), 5, f"{name}: no hello over the framed channel")
+    await wait_for(lambda: kinds(sdus).count(PKT_STATE_FULL) >= 3, 5, f"{name}: no state over the framed channel")
+    assert all(crc16(s[:-2]) == struct.unpack("<H", s[-2:])[0] for s in sdus), f"{name}: a frame with a bad CRC"
+    done.set()
+    seen = len(sdus)
+    await asyncio.sleep(1.0)  # the other peer leaves meanwhile: this one keeps its state
+    assert kinds(sdus[seen:]).count(PKT_STATE_FULL) >= 3, f"{name}: state stopped when the other peer left"
+    await l2.disconnect()
+    await conn.disconnect()
+    return True
+
+
 async def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("robot")
+    parser.add_argument("--firmware", action="store_true", help="ROBOT is tests/bt_robot.c: talk PocketBot to it")
     parser.add_argument("--trace")
     parser.add_argument("--trace-c", help="write the recorded session as tests/bt_trace.h")
     parser.add_argument("--peers", type=int, default=2)
@@ -175,7 +274,8 @@ async def main():
     loop = asyncio.get_running_loop()
     server = await loop.create_server(lambda: wire, "127.0.0.1", 0)
     port = server.sockets[0].getsockname()[1]
-    robot = subprocess.Popen([args.robot, "--live", str(port), "30"], stdout=subprocess.PIPE, text=True)
+    command = [args.robot, str(port), "30"] if args.firmware else [args.robot, "--live", str(port), "30"]
+    robot = subprocess.Popen(command, stdout=subprocess.PIPE, text=True)
 
     devices = []
     for i in range(args.peers):
@@ -188,7 +288,12 @@ async def main():
     ok = False
     try:
         await wait_for(lambda: robot_ctrl.classic_scan_enable == 3, 10, "the robot's controller made connectable")
-        results = await asyncio.gather(*(peer_session(d, f"peer{i}", args.rounds) for i, d in enumerate(devices)))
+        if args.firmware:
+            done = asyncio.Event()
+            results = await asyncio.gather(firmware_over_rfcomm(devices[0], "peer0", done),
+                                           firmware_over_l2cap(devices[1], "peer1", done))
+        else:
+            results = await asyncio.gather(*(peer_session(d, f"peer{i}", args.rounds) for i, d in enumerate(devices)))
         ok = all(results)
     except Exception as e:
         print(f"FAIL: {e!r}")

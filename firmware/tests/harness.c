@@ -44,6 +44,7 @@ int main(int argc, char **argv)
     suite_debug();
     suite_scheduler();
     suite_track();
+    suite_links();
     return harness_report();
 }
 #endif

@@ -40,6 +40,7 @@ void suite_sensors(void);
 void suite_debug(void);
 void suite_scheduler(void);
 void suite_track(void);
+void suite_links(void);
 
 /* The Bluetooth stack's suites (bt_tests: the stack below comm, with tests/bt_wire.c as its controller). */
 void suite_bt_h4(void);

@@ -82,7 +82,7 @@ static void staged_bytes_go_out_within_credits(void)
     wire_clear();
     uint8_t d[60];
     memset(d, 0x5A, sizeof d);
-    CHECK(rfcomm_tx_room(0) == 127, "room %u", rfcomm_tx_room(0));
+    CHECK(rfcomm_tx_room(0) == RFCOMM_TX_SIZE - 1u, "room %u", rfcomm_tx_room(0));
     wire_uart_bytes_per_ms = 12;
     rfcomm_write(0, d, 60);
     wire_run_ms(10);
