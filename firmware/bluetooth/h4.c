@@ -36,6 +36,11 @@ bool h4_flush(void)
     return any;
 }
 
+bool h4_rx_busy(void)
+{
+    return rd.state != S_TYPE || uart_rx_waiting();
+}
+
 bool h4_stalled(uint32_t now_ms)
 {
     return rd.state != S_TYPE && now_ms - rd.last_ms > H4_PACKET_TIMEOUT_MS;

@@ -85,8 +85,10 @@ void h4_tx_u16(uint16_t v);
 void h4_tx_bytes(const uint8_t *p, uint16_t n);
 void h4_tx_flash(const HAL_FLASH uint8_t *p, uint16_t n);
 void h4_tx_zeros(uint16_t n);
-/** Publishes what was written to the USART interrupt (at packet boundaries) and starts it. */
+/** Publishes what was written to the USART interrupt (at packet boundaries) and starts it; the write may go on. */
 void h4_tx_end(void);
+/** \return true while received bytes wait in the ring or a packet is being read. */
+bool h4_rx_busy(void);
 
 /** Writes an HCI command packet (h4_tx_begin() .. h4_tx_end()); the caller checked the room for 4 + len. */
 void h4_command(uint16_t opcode, const uint8_t *params, uint8_t len);

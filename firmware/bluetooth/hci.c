@@ -95,6 +95,9 @@ static uint8_t rx_link; /* link of the ACL fragment being read, 0xFF: dropped */
 static uint16_t rx_lost; /* bytes the UART's receive ring had lost when last looked at */
 
 /* ACL writer. */
+static uint8_t w_open; /* a PDU is being written */
+static uint8_t w_link;
+static uint8_t w_unsent; /* its fragments not yet published (their controller buffers are taken) */
 static uint16_t w_handle;
 static uint16_t w_pdu_left;
 static uint16_t w_frag_left;
@@ -235,6 +238,7 @@ void hci_disconnect(uint8_t link)
 static void recover(void)
 {
     robot_state.errors.bt_resets++;
+    w_open = 0; /* a PDU being written is abandoned: its unpublished bytes are never sent */
     drop_links(HCI_REASON_RESET);
     reply_count = 0;
     pending_op = 0;
@@ -250,6 +254,7 @@ void hci_init(void)
     reply_count = 0;
     pending_op = 0;
     key_out.waiting = 0;
+    w_open = 0;
     acl_mtu = 0;
     acl_total = acl_free = 0;
     rx_link = 0xFFu;
@@ -273,7 +278,7 @@ const uint8_t *hci_bd_addr(void)
 
 static bool command(uint16_t op, const uint8_t *params, uint8_t len)
 {
-    if (h4_tx_room() < 4u + len)
+    if (w_open || h4_tx_room() < 4u + len)
         return false;
     h4_command(op, params, len);
     pending_op = op;
@@ -286,7 +291,7 @@ static bool write_local_name(void)
 {
     /* Without its NUL: avr-gcc 5.4's LTO fails on two equal __flash strings (settings.c has this one). */
     static const HAL_FLASH char name_prefix[sizeof BT_NAME_PREFIX - 1u] = BT_NAME_PREFIX;
-    if (h4_tx_room() < 4u + NAME_LEN)
+    if (w_open || h4_tx_room() < 4u + NAME_LEN)
         return false;
     uint8_t id = settings.identity.robot_id;
     char digits[3];
@@ -479,6 +484,8 @@ static void on_disconnection_complete(const uint8_t *p)
     uint8_t i = link_by_handle(le16(p + 1) & 0x0FFFu);
     if (i == BT_LINKS)
         return;
+    if (w_open && w_link == i)
+        hci_acl_abort();
     links[i].state = LINK_FREE;
     acl_free = (uint8_t)(acl_free + links[i].in_flight); /* its packets were flushed */
     links[i].in_flight = 0;
@@ -581,8 +588,6 @@ static void on_acl_header(void)
 
 static void send_next(void)
 {
-    if (pending_op || command_credits == 0)
-        return;
     if (state == ST_INIT)
         send_init();
     else if (reply_count)
@@ -591,6 +596,36 @@ static void send_next(void)
         write_local_name();
     else if (now_ms() - last_command_ms >= HCI_KEEPALIVE_MS)
         command(OP_READ_BD_ADDR, NULL, 0);
+}
+
+/* Reads a slice of the wire. \return true when the controller is being reset (nothing more this tick). */
+static bool read_wire(void)
+{
+    uint8_t budget = HCI_RX_BUDGET;
+    for (;;) {
+        h4_result_t r = h4_read(&budget);
+        if (r == H4_NONE)
+            break;
+        if (r == H4_ERROR) {
+            robot_state.errors.bt_wire++;
+            recover();
+            return true;
+        }
+        if (r == H4_EVENT_READY)
+            on_event();
+        else if (r == H4_ACL_HEADER)
+            on_acl_header();
+        else if (rx_link < BT_LINKS)
+            l2cap_rx_fragment_done(rx_link);
+        if (state == ST_QUIET)
+            return true; /* the event was a hardware error, or an essential init step failed */
+    }
+    if (h4_stalled(now_ms())) {
+        robot_state.errors.bt_wire++;
+        recover();
+        return true;
+    }
+    return false;
 }
 
 void hci_task(void)
@@ -614,38 +649,19 @@ void hci_task(void)
         recover();
         return;
     }
-    uint8_t budget = HCI_RX_BUDGET;
-    for (;;) {
-        h4_result_t r = h4_read(&budget);
-        if (r == H4_NONE)
-            break;
-        if (r == H4_ERROR) {
-            robot_state.errors.bt_wire++;
-            recover();
-            return;
-        }
-        if (r == H4_EVENT_READY)
-            on_event();
-        else if (r == H4_ACL_HEADER)
-            on_acl_header();
-        else if (rx_link < BT_LINKS)
-            l2cap_rx_fragment_done(rx_link);
-        if (state == ST_QUIET)
-            return; /* the event was a hardware error, or an essential init step failed */
-    }
+    if (h4_rx_busy() && read_wire())
+        return;
     uint32_t now = now_ms();
-    if (h4_stalled(now)) {
-        robot_state.errors.bt_wire++;
-        recover();
-        return;
+    if (pending_op) {
+        if (now - pending_ms > HCI_COMMAND_TIMEOUT_MS) {
+            robot_state.errors.bt_timeouts++;
+            recover();
+        }
+    } else if (command_credits) {
+        send_next();
     }
-    if (pending_op && now - pending_ms > HCI_COMMAND_TIMEOUT_MS) {
-        robot_state.errors.bt_timeouts++;
-        recover();
-        return;
-    }
-    send_next();
-    key_write_task();
+    if (key_out.waiting)
+        key_write_task();
 }
 
 /* ---- ACL data out ---- */
@@ -662,7 +678,7 @@ static uint8_t fragments(uint16_t len)
 
 bool hci_acl_can_send(uint16_t len, bool data)
 {
-    if (state != ST_READY)
+    if (state != ST_READY || w_open)
         return false;
     uint8_t frags = fragments(len);
     uint8_t spare = data && acl_total > 2u ? 1u : 0u;
@@ -672,7 +688,7 @@ bool hci_acl_can_send(uint16_t len, bool data)
 
 uint16_t hci_acl_room(bool data)
 {
-    if (state != ST_READY)
+    if (state != ST_READY || w_open)
         return 0;
     uint16_t bytes = h4_tx_room();
     uint8_t spare = data && acl_total > 2u ? 1u : 0u;
@@ -704,17 +720,23 @@ void hci_acl_begin(uint8_t link, uint16_t len)
     uint8_t frags = fragments(len);
     acl_free = (uint8_t)(acl_free - frags);
     links[link].in_flight = (uint8_t)(links[link].in_flight + frags);
+    w_link = link;
+    w_unsent = frags;
     w_handle = links[link].handle;
     w_pdu_left = len;
+    w_open = 1;
     h4_tx_begin();
     fragment_header(ACL_START);
 }
 
-/* Room in the current fragment, starting the next one when it is full. */
+/* Room in the current fragment; a full one goes to the UART and the next one starts. */
 static uint16_t fragment_room(void)
 {
-    if (w_frag_left == 0)
+    if (w_frag_left == 0) {
+        h4_tx_end();
+        w_unsent--;
         fragment_header(ACL_CONTINUE);
+    }
     return w_frag_left;
 }
 
@@ -765,5 +787,15 @@ void hci_acl_put_u16(uint16_t v)
 
 void hci_acl_end(void)
 {
+    w_open = 0;
     h4_tx_end();
+}
+
+void hci_acl_abort(void)
+{
+    if (!w_open)
+        return;
+    w_open = 0; /* the unpublished bytes are written over by the next writer */
+    acl_free = (uint8_t)(acl_free + w_unsent);
+    links[w_link].in_flight = (uint8_t)(links[w_link].in_flight - w_unsent);
 }

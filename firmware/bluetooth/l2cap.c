@@ -52,6 +52,8 @@ typedef struct {
 
 enum { RX_IDLE, RX_ASSEMBLING, RX_PENDING };
 
+static uint8_t waiting; /* a PDU or a configuration request waits for room: l2cap_task() has work */
+
 static struct {
     uint8_t rx_state;
     uint8_t sig_done;  /* signalling commands of a pending PDU already handled */
@@ -86,6 +88,7 @@ static uint8_t service_of(uint8_t link, uint16_t cid)
 void l2cap_init(void)
 {
     memset(ls, 0, sizeof ls);
+    waiting = 0;
     for (uint8_t i = 0; i < BT_LINKS; i++)
         ls[i].next_id = 1;
 }
@@ -241,7 +244,8 @@ static bool on_connect_request(uint8_t link, uint8_t id, const uint8_t *p)
         c->cfg = CFG_REQ_DUE;
         c->rcid = scid;
         c->rmtu = L2CAP_DEFAULT_MTU;
-        send_config_request(link, s); /* or from l2cap_task() when there is room */
+        if (!send_config_request(link, s))
+            waiting = 1; /* l2cap_task() sends it when there is room */
     }
     return true;
 }
@@ -460,6 +464,7 @@ static void handle(uint8_t link)
         ls[link].sig_done = 0;
     } else {
         ls[link].rx_state = RX_PENDING;
+        waiting = 1;
     }
 }
 
@@ -510,11 +515,19 @@ void l2cap_rx_fragment_done(uint8_t link)
 
 void l2cap_task(void)
 {
+    if (!waiting)
+        return;
+    waiting = 0;
     for (uint8_t link = 0; link < BT_LINKS; link++) {
         if (ls[link].rx_state == RX_PENDING)
             handle(link);
         for (uint8_t s = 0; s < L2CAP_SERVICES; s++)
             if (ls[link].ch[s].state == CH_CONFIG && (ls[link].ch[s].cfg & CFG_REQ_DUE))
                 send_config_request(link, s);
+        if (ls[link].rx_state == RX_PENDING)
+            waiting = 1;
+        for (uint8_t s = 0; s < L2CAP_SERVICES; s++)
+            if (ls[link].ch[s].state == CH_CONFIG && (ls[link].ch[s].cfg & CFG_REQ_DUE))
+                waiting = 1;
     }
 }

@@ -56,6 +56,8 @@ static const HAL_FLASH uint8_t crc_table[256] = {
 #define MSC_DUE 0x01u /* our modem status command waits for room */
 #define PAUSED 0x02u  /* the peer sent FCoff (without credit-based flow control) */
 
+static uint8_t next_link; /* the link whose data goes first next time (turns) */
+
 static struct {
     uint8_t mux;        /* DLCI 0 open */
     uint8_t dlc;        /* the data channel open */
@@ -64,6 +66,8 @@ static struct {
     uint8_t tx_credits; /* frames the robot may send */
     uint8_t rx_credits; /* frames the peer may send */
     uint8_t n1;         /* the largest information field, both ways */
+    uint8_t out_left;   /* information bytes of the frame being written still to write */
+    uint8_t out_ctrl;   /* and its control field */
     uint8_t head, tail; /* staged bytes: [tail, head) */
     uint8_t buf[RFCOMM_TX_SIZE];
 } rs[BT_LINKS];
@@ -89,6 +93,10 @@ void rfcomm_init(void)
 
 static void close_dlc(uint8_t link, bool lost)
 {
+    if (rs[link].out_left) {
+        hci_acl_abort(); /* the frame being written goes with the channel */
+        rs[link].out_left = 0;
+    }
     if (rs[link].dlc) {
         rs[link].dlc = 0;
         l2cap_set_stream(link, false);
@@ -321,28 +329,47 @@ void rfcomm_write(uint8_t link, const uint8_t *p, uint16_t n)
     rs[link].head = h;
 }
 
-/* Sends a UIH frame of up to `n` staged bytes (0: credits alone), giving `give` credits. */
-static bool send_data(uint8_t link, uint8_t n, uint8_t give)
+/* Writes the next slice of the frame being written (and its end). */
+static void write_slice(uint8_t link)
 {
-    uint8_t addr = (uint8_t)(DLCI << 2 | 1u), ctrl = (uint8_t)(give ? UIH | PF : UIH);
-    if (!frame_begin(link, addr, ctrl, n, give, n != 0))
-        return false;
+    uint8_t n = rs[link].out_left > RFCOMM_SLICE ? RFCOMM_SLICE : rs[link].out_left;
     uint8_t t = rs[link].tail;
     uint16_t first = (uint16_t)(RFCOMM_TX_SIZE - t);
     if (first > n)
         first = n;
     hci_acl_put(rs[link].buf + t, first);
     hci_acl_put(rs[link].buf, (uint16_t)(n - first));
-    frame_end(addr, ctrl);
     rs[link].tail = (uint8_t)(t + n);
+    rs[link].out_left = (uint8_t)(rs[link].out_left - n);
+    if (rs[link].out_left == 0)
+        frame_end((uint8_t)(DLCI << 2 | 1u), rs[link].out_ctrl);
+}
+
+/* Starts a UIH frame of `n` staged bytes (0: credits alone), giving `give` credits. */
+static bool send_data(uint8_t link, uint8_t n, uint8_t give)
+{
+    uint8_t addr = (uint8_t)(DLCI << 2 | 1u), ctrl = (uint8_t)(give ? UIH | PF : UIH);
+    if (!frame_begin(link, addr, ctrl, n, give, n != 0))
+        return false;
     rs[link].rx_credits = (uint8_t)(rs[link].rx_credits + give);
-    if (n && rs[link].cbfc)
+    if (n == 0) {
+        frame_end(addr, ctrl);
+        return true;
+    }
+    if (rs[link].cbfc)
         rs[link].tx_credits--;
+    rs[link].out_left = n;
+    rs[link].out_ctrl = ctrl;
+    write_slice(link);
     return true;
 }
 
 static void link_task(uint8_t link)
 {
+    if (rs[link].out_left) {
+        write_slice(link);
+        return;
+    }
     if (rs[link].flags & MSC_DUE) {
         uint8_t v[2] = {(uint8_t)(DLCI << 2 | 0x02u | 1u), V24_READY};
         if (!send_mcc(link, MCC_MSC | MCC_COMMAND, v, 2))
@@ -353,6 +380,8 @@ static void link_task(uint8_t link)
     if (rs[link].cbfc && rs[link].rx_credits <= RFCOMM_RX_CREDITS / 2u)
         give = (uint8_t)(RFCOMM_RX_CREDITS - rs[link].rx_credits);
     uint8_t staged = (uint8_t)(rs[link].head - rs[link].tail);
+    if (staged == 0 && give == 0)
+        return;
     uint16_t max = l2cap_peer_mtu(link, L2CAP_RFCOMM);
     max = max > OVERHEAD ? (uint16_t)(max - OVERHEAD) : 0;
     if (max > rs[link].n1)
@@ -368,7 +397,15 @@ static void link_task(uint8_t link)
 
 void rfcomm_task(void)
 {
-    for (uint8_t link = 0; link < BT_LINKS; link++)
-        if (rs[link].dlc)
-            link_task(link);
+    for (uint8_t k = 0; k < BT_LINKS; k++) {
+        uint8_t link = (uint8_t)((next_link + k) % BT_LINKS);
+        if (!rs[link].dlc)
+            continue;
+        bool writing = rs[link].out_left != 0;
+        link_task(link);
+        if (writing && rs[link].out_left == 0)
+            next_link = (uint8_t)((link + 1u) % BT_LINKS); /* a frame ended: the other link's turn */
+        if (rs[link].out_left)
+            return; /* one frame at a time in the transmit ring */
+    }
 }

@@ -6,8 +6,9 @@
  * as on any stream).
  *
  * Bytes to send are staged per link (RFCOMM_TX_SIZE) and go out as UIH frames of up to N1 bytes: at once when a
- * frame is full, else when the UART is about to run dry, so frames grow while the wire is busy. Credits are given
- * back as received frames are handled (comm handles each at once), with data or on a frame of their own.
+ * frame is full, else when the UART is about to run dry, so frames grow while the wire is busy; a frame is written
+ * RFCOMM_SLICE bytes per tick. Credits are given back as received frames are handled (comm handles each at once),
+ * with data or on a frame of their own.
  */
 #ifndef RFCOMM_H
 #define RFCOMM_H
@@ -21,6 +22,9 @@
 #define RFCOMM_RX_CREDITS 7u
 /** A partial frame goes out when fewer bytes than this wait for the UART (it is about to run dry). */
 #define RFCOMM_IDLE_BACKLOG 16u
+/** Information bytes of a frame written into the transmit ring per tick: a long frame takes a few ticks (the wire
+ *  needs 10 ms for it anyway), so no tick pays for all of it. */
+#define RFCOMM_SLICE 24u
 
 void rfcomm_init(void);
 

@@ -45,6 +45,11 @@ bool uart_getc(uint8_t *byte)
     return true;
 }
 
+bool uart_rx_waiting(void)
+{
+    return rx_tail != rx_head;
+}
+
 uint8_t uart_read(uint8_t *dst, uint8_t max)
 {
     uint8_t t = rx_tail;

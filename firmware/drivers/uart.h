@@ -17,6 +17,9 @@ void uart_init(void);
 /** Takes one received byte. \return false when none is waiting. */
 bool uart_getc(uint8_t *byte);
 
+/** \return true when received bytes wait. */
+bool uart_rx_waiting(void);
+
 /** Takes up to `max` received bytes into `dst`. \return how many. */
 uint8_t uart_read(uint8_t *dst, uint8_t max);
 

@@ -97,6 +97,8 @@ void wire_run_ms(int ms)
 {
     while (ms-- > 0)
         tick();
+    for (int k = 0; k < 100 && h4_rx_busy(); k++) /* and until what was fed is read (HCI_RX_BUDGET a tick) */
+        tick();
 }
 
 /* ---- controller to robot ---- */

@@ -16,7 +16,8 @@
 
 /** Erases the EEPROM, resets every counter and the stack (hci_init ...). */
 void wire_reset(void);
-/** Runs the stack's tasks for `ms` milliseconds of robot time (one pass per ms). */
+/** Runs the stack's tasks for `ms` milliseconds of robot time (one pass per ms), and on until the bytes fed are
+ *  read (a stalled packet stops that after H4_PACKET_TIMEOUT_MS). */
 void wire_run_ms(int ms);
 /** Bytes the UART sends (into the collected packets) per ms of wire_run_ms(); 0 (after wire_reset()): none, the
  *  test collects with wire_collect(). 12 is the 115200 Bd wire. */
