@@ -19,13 +19,14 @@ static void stream_write(uint8_t link, const uint8_t *p, uint16_t n)
     rfcomm_write(link, p, n);
 }
 
-/* The framed channel: one frame per SDU, written straight into the transmit ring. */
+/* The framed channel: one frame per SDU, written straight into the transmit ring. Room is reported for the
+ * longest frame or none (comm offers again later), which keeps the check to one. */
 static uint16_t framed_room(uint8_t link)
 {
     uint16_t n = l2cap_peer_mtu(link, L2CAP_FRAMED);
-    uint16_t room = hci_acl_room(true);
-    room = room > 4u ? (uint16_t)(room - 4u) : 0; /* the L2CAP header */
-    return n < room ? n : room;
+    if (n > PB_MAX_FRAME)
+        n = PB_MAX_FRAME;
+    return l2cap_can_send(link, L2CAP_FRAMED, n, true) ? n : 0;
 }
 
 static void framed_write(uint8_t link, const uint8_t *p, uint16_t n)

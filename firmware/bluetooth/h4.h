@@ -83,7 +83,6 @@ void h4_tx_begin(void);
 void h4_tx_byte(uint8_t b);
 void h4_tx_u16(uint16_t v);
 void h4_tx_bytes(const uint8_t *p, uint16_t n);
-void h4_tx_flash(const HAL_FLASH uint8_t *p, uint16_t n);
 void h4_tx_zeros(uint16_t n);
 /** Publishes what was written to the USART interrupt (at packet boundaries) and starts it; the write may go on. */
 void h4_tx_end(void);

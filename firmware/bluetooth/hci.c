@@ -9,7 +9,6 @@
 #include "protocol/pb_frame.h"
 
 /* Commands (OGF << 10 | OCF). */
-#define OP_DISCONNECT 0x0406u
 #define OP_ACCEPT_CONNECTION 0x0409u
 #define OP_REJECT_CONNECTION 0x040Au
 #define OP_LINK_KEY_REPLY 0x040Bu
@@ -47,31 +46,40 @@
 #define ACL_CONTINUE 0x1000u
 #define FRAGMENT_HEADER 5u /* H4 type, handle and flags, length */
 
-/* The initialisation after a reset, one command at a time; only the first three must succeed. */
-static const HAL_FLASH uint16_t init_ops[] = {
-    OP_RESET, OP_READ_BUFFER_SIZE, OP_READ_BD_ADDR, OP_HOST_BUFFER_SIZE, OP_SET_EVENT_MASK, OP_WRITE_SSP_MODE,
-    OP_WRITE_LOCAL_NAME, OP_WRITE_CLASS_OF_DEVICE, OP_WRITE_SCAN_ENABLE,
+/* The initialisation after a reset, one command at a time (only the first three must succeed): each as its
+ * opcode, parameter length and parameters; the local name is made from the settings (write_local_name()). */
+#define LE16(v) (uint8_t)(v), (uint8_t)((v) >> 8)
+static const HAL_FLASH uint8_t init_commands[] = {
+    LE16(OP_RESET), 0,
+    LE16(OP_READ_BUFFER_SIZE), 0,
+    LE16(OP_READ_BD_ADDR), 0,
+    /* the ACL packets the robot takes; no SCO; host flow control stays off */
+    LE16(OP_HOST_BUFFER_SIZE), 7, LE16(BT_ACL_RX_MAX), 0, LE16(4), LE16(0),
+    /* the default events and Secure Simple Pairing's (IO capability request/response, user confirmation and
+     * passkey, OOB, simple pairing complete: bits 48..53) */
+    LE16(OP_SET_EVENT_MASK), 8, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x1F, 0x3F, 0x00,
+    LE16(OP_WRITE_SSP_MODE), 1, 1,
+    LE16(OP_WRITE_LOCAL_NAME), 0,
+    LE16(OP_WRITE_CLASS_OF_DEVICE), 3, (uint8_t)BT_CLASS_OF_DEVICE, (uint8_t)(BT_CLASS_OF_DEVICE >> 8),
+    (uint8_t)(BT_CLASS_OF_DEVICE >> 16),
+    LE16(OP_WRITE_SCAN_ENABLE), 1, 0x03, /* inquiry and page scan */
 };
-#define INIT_STEPS (sizeof init_ops / sizeof init_ops[0])
+#define INIT_STEPS 9u
 #define INIT_ESSENTIAL 3u
 
-/* The default events and Secure Simple Pairing's (IO capability request/response, user confirmation and passkey,
- * OOB, simple pairing complete: bits 48..53). */
-static const HAL_FLASH uint8_t event_mask[8] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x1F, 0x3F, 0x00};
-
 /* Answers to the controller's requests, sent as command credits allow. */
-enum { REPLY_ACCEPT, REPLY_REJECT, REPLY_LINK_KEY, REPLY_PIN_NEGATIVE, REPLY_IO_CAPABILITY, REPLY_USER_CONFIRM,
-       REPLY_DISCONNECT };
+enum { REPLY_ACCEPT, REPLY_REJECT, REPLY_LINK_KEY, REPLY_PIN_NEGATIVE, REPLY_IO_CAPABILITY, REPLY_USER_CONFIRM };
 #define REPLIES 4u
 static struct {
     uint8_t kind;
-    uint8_t addr[6]; /* REPLY_DISCONNECT: the handle in the first two bytes */
+    uint8_t addr[6];
 } replies[REPLIES];
 static uint8_t reply_count;
 
 enum { ST_QUIET, ST_INIT, ST_READY };
 static uint8_t state;
 static uint8_t step;          /* the init command sent or to send */
+static uint8_t step_at;       /* and where it is in init_commands */
 static uint8_t quiet_ticks;   /* ticks without a received byte, before the reset is sent */
 static uint16_t pending_op;   /* command sent and not answered yet (0: none) */
 static uint32_t pending_ms;
@@ -224,14 +232,6 @@ static void queue_reply(uint8_t kind, const uint8_t *addr)
     reply_count++;
 }
 
-void hci_disconnect(uint8_t link)
-{
-    if (link < BT_LINKS && links[link].state == LINK_UP) {
-        uint8_t h[6] = {(uint8_t)links[link].handle, (uint8_t)(links[link].handle >> 8)};
-        queue_reply(REPLY_DISCONNECT, h);
-    }
-}
-
 /* ---- recovery ---- */
 
 /* The wire or the controller failed: every link is gone, and the controller is reset once the wire is quiet. */
@@ -290,28 +290,25 @@ static bool command(uint16_t op, const uint8_t *params, uint8_t len)
 static bool write_local_name(void)
 {
     /* Without its NUL: avr-gcc 5.4's LTO fails on two equal __flash strings (settings.c has this one). */
-    static const HAL_FLASH char name_prefix[sizeof BT_NAME_PREFIX - 1u] = BT_NAME_PREFIX;
+    static const HAL_FLASH char prefix[sizeof BT_NAME_PREFIX - 1u] = BT_NAME_PREFIX;
     if (w_open || h4_tx_room() < 4u + NAME_LEN)
         return false;
+    uint8_t head[4 + sizeof prefix + 3] = {H4_COMMAND, (uint8_t)OP_WRITE_LOCAL_NAME, OP_WRITE_LOCAL_NAME >> 8,
+                                           (uint8_t)NAME_LEN};
+    uint8_t n = 4;
+    for (uint8_t k = 0; k < sizeof prefix; k++)
+        head[n++] = (uint8_t)prefix[k];
     uint8_t id = settings.identity.robot_id;
-    char digits[3];
-    uint8_t n = 0;
-    do {
-        digits[n++] = (char)('0' + id % 10u);
-        id /= 10u;
-    } while (id);
-    uint8_t prefix = sizeof name_prefix;
+    name_id = id;
+    for (uint8_t div = 100; div; div /= 10u) /* decimal, without leading zeros */
+        if (id >= div || div == 1u || n > 4u + sizeof prefix) {
+            head[n++] = (uint8_t)('0' + id / div);
+            id %= div;
+        }
     h4_tx_begin();
-    h4_tx_byte(H4_COMMAND);
-    h4_tx_u16(OP_WRITE_LOCAL_NAME);
-    h4_tx_byte((uint8_t)NAME_LEN);
-    for (uint8_t k = 0; k < prefix; k++)
-        h4_tx_byte((uint8_t)name_prefix[k]);
-    for (uint8_t k = n; k;)
-        h4_tx_byte((uint8_t)digits[--k]);
-    h4_tx_zeros((uint16_t)(NAME_LEN - prefix - n));
+    h4_tx_bytes(head, n);
+    h4_tx_zeros((uint16_t)(NAME_LEN - (n - 4u)));
     h4_tx_end();
-    name_id = settings.identity.robot_id;
     pending_op = OP_WRITE_LOCAL_NAME;
     pending_ms = last_command_ms = now_ms();
     command_credits--;
@@ -320,52 +317,21 @@ static bool write_local_name(void)
 
 static void send_init(void)
 {
-    uint16_t op = init_ops[step];
-    uint8_t p[8];
-    switch (op) {
-    case OP_HOST_BUFFER_SIZE: /* the ACL packets the robot takes; no SCO; host flow control stays off */
-        p[0] = (uint8_t)BT_ACL_RX_MAX;
-        p[1] = (uint8_t)(BT_ACL_RX_MAX >> 8);
-        p[2] = 0;
-        p[3] = 4;
-        p[4] = 0;
-        p[5] = 0;
-        p[6] = 0;
-        command(op, p, 7);
-        break;
-    case OP_SET_EVENT_MASK:
-        for (uint8_t i = 0; i < 8; i++)
-            p[i] = event_mask[i];
-        command(op, p, 8);
-        break;
-    case OP_WRITE_SSP_MODE:
-        p[0] = 1;
-        command(op, p, 1);
-        break;
-    case OP_WRITE_LOCAL_NAME:
+    const HAL_FLASH uint8_t *c = init_commands + step_at;
+    uint16_t op = (uint16_t)(c[0] | c[1] << 8);
+    uint8_t len = c[2], p[8];
+    for (uint8_t i = 0; i < len; i++)
+        p[i] = c[3 + i];
+    if (op == OP_WRITE_LOCAL_NAME)
         write_local_name();
-        break;
-    case OP_WRITE_CLASS_OF_DEVICE:
-        p[0] = (uint8_t)BT_CLASS_OF_DEVICE;
-        p[1] = (uint8_t)(BT_CLASS_OF_DEVICE >> 8);
-        p[2] = (uint8_t)(BT_CLASS_OF_DEVICE >> 16);
-        command(op, p, 3);
-        break;
-    case OP_WRITE_SCAN_ENABLE:
-        p[0] = 0x03; /* inquiry and page scan */
-        command(op, p, 1);
-        break;
-    default:
-        command(op, NULL, 0);
-        break;
-    }
+    else
+        command(op, p, len);
 }
 
 static void send_reply(void)
 {
     static const HAL_FLASH uint16_t ops[] = {OP_ACCEPT_CONNECTION, OP_REJECT_CONNECTION, OP_LINK_KEY_REPLY,
-                                             OP_PIN_NEGATIVE, OP_IO_CAPABILITY_REPLY, OP_USER_CONFIRM_REPLY,
-                                             OP_DISCONNECT};
+                                             OP_PIN_NEGATIVE, OP_IO_CAPABILITY_REPLY, OP_USER_CONFIRM_REPLY};
     uint8_t p[6 + 16];
     uint8_t kind = replies[0].kind;
     uint16_t op = ops[kind];
@@ -397,10 +363,6 @@ static void send_reply(void)
         p[8] = 0x04; /* general bonding, MITM protection not required */
         len = 9;
         break;
-    case REPLY_DISCONNECT:
-        p[2] = HCI_REASON_REMOTE_USER;
-        len = 3;
-        break;
     default:
         break;
     }
@@ -418,7 +380,7 @@ static void command_done(uint16_t op, uint8_t status, const uint8_t *ret, uint8_
         return; /* a NOP: credits only */
     if (op == pending_op)
         pending_op = 0;
-    if (state != ST_INIT || op != init_ops[step])
+    if (state != ST_INIT || op != (uint16_t)(init_commands[step_at] | init_commands[step_at + 1] << 8))
         return;
     if (status != 0) {
         if (step < INIT_ESSENTIAL) {
@@ -436,6 +398,7 @@ static void command_done(uint16_t op, uint8_t status, const uint8_t *ret, uint8_
     } else if (op == OP_READ_BD_ADDR && len >= 6) {
         memcpy(bd_addr, ret, 6);
     }
+    step_at = (uint8_t)(step_at + 3u + init_commands[step_at + 2]);
     if (++step == INIT_STEPS)
         state = ST_READY;
 }
@@ -509,25 +472,20 @@ static void on_completed_packets(const uint8_t *p, uint8_t n)
     }
 }
 
-/* Minimal parameter lengths of the events read (0: ignored). */
+/* The events the stack reads and the fewest parameter bytes each must have (the others are ignored). */
+static const HAL_FLASH uint8_t event_min[][2] = {
+    {EV_COMMAND_COMPLETE, 3}, {EV_COMMAND_STATUS, 4}, {EV_CONNECTION_REQUEST, 10}, {EV_CONNECTION_COMPLETE, 11},
+    {EV_DISCONNECTION_COMPLETE, 4}, {EV_COMPLETED_PACKETS, 1}, {EV_LINK_KEY_NOTIFICATION, 23}, {EV_PIN_REQUEST, 6},
+    {EV_LINK_KEY_REQUEST, 6}, {EV_IO_CAPABILITY_REQUEST, 6}, {EV_USER_CONFIRM_REQUEST, 6}, {EV_HARDWARE_ERROR, 0},
+    {EV_BUFFER_OVERFLOW, 0},
+};
+
 static uint8_t event_min_len(uint8_t code)
 {
-    switch (code) {
-    case EV_COMMAND_COMPLETE: return 3;
-    case EV_COMMAND_STATUS: return 4;
-    case EV_CONNECTION_REQUEST: return 10;
-    case EV_CONNECTION_COMPLETE: return 11;
-    case EV_DISCONNECTION_COMPLETE: return 4;
-    case EV_COMPLETED_PACKETS: return 1;
-    case EV_LINK_KEY_NOTIFICATION: return 23;
-    case EV_PIN_REQUEST:
-    case EV_LINK_KEY_REQUEST:
-    case EV_IO_CAPABILITY_REQUEST:
-    case EV_USER_CONFIRM_REQUEST: return 6;
-    case EV_HARDWARE_ERROR:
-    case EV_BUFFER_OVERFLOW: return 0;
-    default: return 0xFFu;
-    }
+    for (uint8_t i = 0; i < sizeof event_min / sizeof event_min[0]; i++)
+        if (event_min[i][0] == code)
+            return event_min[i][1];
+    return 0xFFu;
 }
 
 static void on_event(void)
@@ -636,7 +594,7 @@ void hci_task(void)
             quiet_ticks = 0;
         else if (++quiet_ticks >= 2u) {
             state = ST_INIT;
-            step = 0;
+            step = step_at = 0;
             command_credits = 1;
         }
         return;
@@ -686,32 +644,12 @@ bool hci_acl_can_send(uint16_t len, bool data)
     return (uint16_t)(frags + spare) <= acl_free && bytes <= h4_tx_room();
 }
 
-uint16_t hci_acl_room(bool data)
-{
-    if (state != ST_READY || w_open)
-        return 0;
-    uint16_t bytes = h4_tx_room();
-    uint8_t spare = data && acl_total > 2u ? 1u : 0u;
-    if (data)
-        bytes = bytes > HCI_TX_RESERVE ? (uint16_t)(bytes - HCI_TX_RESERVE) : 0;
-    uint16_t best = 0;
-    for (uint8_t f = 1; (uint16_t)(f + spare) <= acl_free && FRAGMENT_HEADER * f < bytes; f++) {
-        uint16_t len = (uint16_t)(bytes - FRAGMENT_HEADER * f);
-        if (len > (uint32_t)f * acl_mtu)
-            len = (uint16_t)(f * acl_mtu);
-        if (len <= (uint32_t)(f - 1u) * acl_mtu)
-            break; /* the headers of one more fragment cost more than it carries */
-        best = len;
-    }
-    return best;
-}
-
 static void fragment_header(uint16_t flags)
 {
     uint16_t n = w_pdu_left > acl_mtu ? acl_mtu : w_pdu_left;
-    h4_tx_byte(H4_ACL);
-    h4_tx_u16((uint16_t)(w_handle | flags));
-    h4_tx_u16(n);
+    uint16_t hf = (uint16_t)(w_handle | flags);
+    uint8_t h[FRAGMENT_HEADER] = {H4_ACL, (uint8_t)hf, (uint8_t)(hf >> 8), (uint8_t)n, (uint8_t)(n >> 8)};
+    h4_tx_bytes(h, FRAGMENT_HEADER);
     w_frag_left = n;
 }
 
@@ -748,24 +686,16 @@ static void advance(uint16_t k)
 
 void hci_acl_put(const uint8_t *p, uint16_t n)
 {
+    if (n && n <= w_frag_left) { /* the usual case: it fits the fragment being written */
+        h4_tx_bytes(p, n);
+        advance(n);
+        return;
+    }
     while (n) {
         uint16_t k = fragment_room();
         if (k > n)
             k = n;
         h4_tx_bytes(p, k);
-        p += k;
-        n = (uint16_t)(n - k);
-        advance(k);
-    }
-}
-
-void hci_acl_put_flash(const HAL_FLASH uint8_t *p, uint16_t n)
-{
-    while (n) {
-        uint16_t k = fragment_room();
-        if (k > n)
-            k = n;
-        h4_tx_flash(p, k);
         p += k;
         n = (uint16_t)(n - k);
         advance(k);

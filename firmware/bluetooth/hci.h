@@ -22,7 +22,7 @@
 #define HCI_COMMAND_TIMEOUT_MS 1000u
 #define HCI_KEEPALIVE_MS 2000u
 /** Received bytes read per hci_task(): the wire brings under 12 per ms, and the ring holds 256. */
-#define HCI_RX_BUDGET 24u
+#define HCI_RX_BUDGET 16u
 /** Transmit ring bytes and controller buffers that data (hci_acl_can_send(..., true)) leaves for answers. */
 #define HCI_TX_RESERVE 48u
 
@@ -52,9 +52,6 @@ const uint8_t *hci_bd_addr(void);
 /** \return the peer address of a connected link, or NULL. */
 const uint8_t *hci_link_addr(uint8_t link);
 
-/** Disconnects a link (the controller reports when it is done). */
-void hci_disconnect(uint8_t link);
-
 /* ---- ACL data out: one L2CAP PDU, fragmented to the controller's buffer size ---- */
 
 /**
@@ -63,8 +60,6 @@ void hci_disconnect(uint8_t link);
  *         Data (`data` true) also leaves HCI_TX_RESERVE bytes and one buffer for answers.
  */
 bool hci_acl_can_send(uint16_t len, bool data);
-/** \return the longest PDU that hci_acl_can_send() would take now (`data` as there). */
-uint16_t hci_acl_room(bool data);
 /** Starts a PDU of `len` bytes on `link` (after hci_acl_can_send()); then exactly `len` bytes of hci_acl_put*(),
  *  which may come over several ticks (each fragment goes to the UART when it is complete), then hci_acl_end().
  *  Meanwhile nothing else is written: commands and other PDUs wait. */
@@ -72,7 +67,6 @@ void hci_acl_begin(uint8_t link, uint16_t len);
 void hci_acl_put(const uint8_t *p, uint16_t n);
 void hci_acl_put_byte(uint8_t b);
 void hci_acl_put_u16(uint16_t v);
-void hci_acl_put_flash(const HAL_FLASH uint8_t *p, uint16_t n);
 /** Publishes the PDU to the UART. */
 void hci_acl_end(void);
 /** Gives up the PDU being written (its link went away): what was not published yet is never sent. */

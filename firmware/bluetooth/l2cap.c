@@ -54,7 +54,7 @@ enum { RX_IDLE, RX_ASSEMBLING, RX_PENDING };
 
 static uint8_t waiting; /* a PDU or a configuration request waits for room: l2cap_task() has work */
 
-static struct {
+typedef struct {
     uint8_t rx_state;
     uint8_t sig_done;  /* signalling commands of a pending PDU already handled */
     uint8_t next_id;   /* identifier of our next signalling request */
@@ -63,7 +63,8 @@ static struct {
     uint16_t rx_frag;  /* bytes of the fragment being read */
     chan_t ch[L2CAP_SERVICES];
     uint8_t rx[HEADER + BT_L2CAP_MTU];
-} ls[BT_LINKS];
+} l2cap_link_t;
+static l2cap_link_t ls[BT_LINKS];
 
 static uint16_t le16(const uint8_t *p)
 {
@@ -79,8 +80,9 @@ static uint16_t local_cid(uint8_t link, uint8_t service)
 /* \return the service of a local channel id of `link`, or L2CAP_SERVICES. */
 static uint8_t service_of(uint8_t link, uint16_t cid)
 {
+    l2cap_link_t *l = &ls[link];
     uint16_t base = local_cid(link, 0);
-    if (cid < base || cid >= base + L2CAP_SERVICES || ls[link].ch[cid - base].state == CH_FREE)
+    if (cid < base || cid >= base + L2CAP_SERVICES || l->ch[cid - base].state == CH_FREE)
         return L2CAP_SERVICES;
     return (uint8_t)(cid - base);
 }
@@ -103,7 +105,8 @@ static void channel_opened(uint8_t link, uint8_t service)
 
 static void channel_closed(uint8_t link, uint8_t service, bool lost)
 {
-    chan_t *c = &ls[link].ch[service];
+    l2cap_link_t *l = &ls[link];
+    chan_t *c = &l->ch[service];
     uint8_t was = c->state;
     c->state = CH_FREE;
     if (was == CH_FREE)
@@ -116,16 +119,18 @@ static void channel_closed(uint8_t link, uint8_t service, bool lost)
 
 void l2cap_link_up(uint8_t link)
 {
-    ls[link].rx_state = RX_IDLE;
-    ls[link].stream = 0;
+    l2cap_link_t *l = &ls[link];
+    l->rx_state = RX_IDLE;
+    l->stream = 0;
     for (uint8_t s = 0; s < L2CAP_SERVICES; s++)
-        ls[link].ch[s].state = CH_FREE;
+        l->ch[s].state = CH_FREE;
 }
 
 void l2cap_link_down(uint8_t link, uint8_t reason)
 {
+    l2cap_link_t *l = &ls[link];
     (void)reason; /* a channel still open when its link goes was lost, whatever the link's reason */
-    ls[link].rx_state = RX_IDLE;
+    l->rx_state = RX_IDLE;
     for (uint8_t s = 0; s < L2CAP_SERVICES; s++)
         channel_closed(link, s, true);
 }
@@ -134,23 +139,27 @@ void l2cap_link_down(uint8_t link, uint8_t reason)
 
 bool l2cap_can_send(uint8_t link, uint8_t service, uint16_t len, bool data)
 {
-    const chan_t *c = &ls[link].ch[service];
+    l2cap_link_t *l = &ls[link];
+    const chan_t *c = &l->ch[service];
     return c->state == CH_OPEN && len <= c->rmtu && hci_acl_can_send((uint16_t)(HEADER + len), data);
 }
 
 bool l2cap_connected(uint8_t link, uint8_t service)
 {
-    return ls[link].ch[service].state != CH_FREE;
+    l2cap_link_t *l = &ls[link];
+    return l->ch[service].state != CH_FREE;
 }
 
 void l2cap_set_stream(uint8_t link, bool open)
 {
-    ls[link].stream = open;
+    l2cap_link_t *l = &ls[link];
+    l->stream = open;
 }
 
 uint16_t l2cap_peer_mtu(uint8_t link, uint8_t service)
 {
-    const chan_t *c = &ls[link].ch[service];
+    l2cap_link_t *l = &ls[link];
+    const chan_t *c = &l->ch[service];
     return c->state == CH_OPEN ? c->rmtu : 0;
 }
 
@@ -163,7 +172,8 @@ static void begin_cid(uint8_t link, uint16_t cid, uint16_t len)
 
 void l2cap_begin(uint8_t link, uint8_t service, uint16_t len)
 {
-    begin_cid(link, ls[link].ch[service].rcid, len);
+    l2cap_link_t *l = &ls[link];
+    begin_cid(link, l->ch[service].rcid, len);
 }
 
 /* A signalling command: code, identifier, length, then `len` bytes the caller puts. \return false without room. */
@@ -190,11 +200,12 @@ static bool signal_cids(uint8_t link, uint8_t code, uint8_t id, uint16_t a, uint
 
 static bool send_config_request(uint8_t link, uint8_t service)
 {
-    chan_t *c = &ls[link].ch[service];
-    uint8_t id = ls[link].next_id;
+    l2cap_link_t *l = &ls[link];
+    chan_t *c = &l->ch[service];
+    uint8_t id = l->next_id;
     if (!signal_begin(link, SIG_CONFIG_REQ, id, 8))
         return false;
-    ls[link].next_id = (uint8_t)(id == 255u ? 1u : id + 1u);
+    l->next_id = (uint8_t)(id == 255u ? 1u : id + 1u);
     c->req_id = id;
     c->cfg = (uint8_t)(c->cfg & ~CFG_REQ_DUE);
     hci_acl_put_u16(c->rcid);
@@ -221,6 +232,7 @@ static uint8_t service_of_psm(uint16_t psm)
 
 static bool on_connect_request(uint8_t link, uint8_t id, const uint8_t *p)
 {
+    l2cap_link_t *l = &ls[link];
     uint16_t psm = le16(p);
     uint16_t scid = le16(p + 2);
     uint8_t s = service_of_psm(psm);
@@ -229,7 +241,7 @@ static bool on_connect_request(uint8_t link, uint8_t id, const uint8_t *p)
         result = CONNECT_PSM_UNSUPPORTED;
     else if (scid < CID_DYNAMIC)
         result = CONNECT_BAD_SOURCE_CID;
-    else if (ls[link].ch[s].state != CH_FREE || (s == L2CAP_FRAMED && ls[link].stream))
+    else if (l->ch[s].state != CH_FREE || (s == L2CAP_FRAMED && l->stream))
         result = CONNECT_NO_RESOURCES; /* one channel per service, one data channel per link */
     if (!signal_begin(link, SIG_CONNECT_RSP, id, 8))
         return false;
@@ -239,7 +251,7 @@ static bool on_connect_request(uint8_t link, uint8_t id, const uint8_t *p)
     hci_acl_put_u16(0);
     hci_acl_end();
     if (result == 0) {
-        chan_t *c = &ls[link].ch[s];
+        chan_t *c = &l->ch[s];
         c->state = CH_CONFIG;
         c->cfg = CFG_REQ_DUE;
         c->rcid = scid;
@@ -252,7 +264,8 @@ static bool on_connect_request(uint8_t link, uint8_t id, const uint8_t *p)
 
 static void config_progress(uint8_t link, uint8_t s)
 {
-    chan_t *c = &ls[link].ch[s];
+    l2cap_link_t *l = &ls[link];
+    chan_t *c = &l->ch[s];
     if (c->state == CH_CONFIG && (c->cfg & (CFG_OUT_DONE | CFG_IN_DONE)) == (CFG_OUT_DONE | CFG_IN_DONE)) {
         c->state = CH_OPEN;
         channel_opened(link, s);
@@ -261,6 +274,7 @@ static void config_progress(uint8_t link, uint8_t s)
 
 static bool on_config_request(uint8_t link, uint8_t id, const uint8_t *p, uint16_t n)
 {
+    l2cap_link_t *l = &ls[link];
     uint16_t dcid = le16(p);
     uint16_t flags = le16(p + 2);
     uint8_t s = service_of(link, dcid);
@@ -273,7 +287,7 @@ static bool on_config_request(uint8_t link, uint8_t id, const uint8_t *p, uint16
         hci_acl_end();
         return true;
     }
-    chan_t *c = &ls[link].ch[s];
+    chan_t *c = &l->ch[s];
     uint16_t mtu = c->rmtu;
     uint16_t result = 0;
     const uint8_t *bad = NULL; /* the option refused */
@@ -301,8 +315,8 @@ static bool on_config_request(uint8_t link, uint8_t id, const uint8_t *p, uint16
     if (result == CONFIG_UNKNOWN_OPTION) {
         hci_acl_put_byte(bad[0]);
     } else if (result == CONFIG_UNACCEPTABLE) { /* the mode we take: basic */
-        static const HAL_FLASH uint8_t basic[11] = {OPT_MODE, 9, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-        hci_acl_put_flash(basic, sizeof basic);
+        uint8_t basic[11] = {OPT_MODE, 9};
+        hci_acl_put(basic, sizeof basic);
     }
     hci_acl_end();
     if (result == 0) {
@@ -316,27 +330,29 @@ static bool on_config_request(uint8_t link, uint8_t id, const uint8_t *p, uint16
 
 static void on_config_response(uint8_t link, uint8_t id, const uint8_t *p)
 {
+    l2cap_link_t *l = &ls[link];
     uint8_t s = service_of(link, le16(p));
-    if (s == L2CAP_SERVICES || ls[link].ch[s].req_id != id)
+    if (s == L2CAP_SERVICES || l->ch[s].req_id != id)
         return;
     uint16_t result = le16(p + 4);
     if (result == 0) {
-        ls[link].ch[s].cfg |= CFG_OUT_DONE;
+        l->ch[s].cfg |= CFG_OUT_DONE;
         config_progress(link, s);
     } else if (result != 0x0004u) { /* refused (not pending): the channel cannot be used */
-        ls[link].ch[s].state = CH_CLOSING;
-        ls[link].ch[s].cfg = 0;
-        uint8_t req = ls[link].next_id;
-        ls[link].next_id = (uint8_t)(req == 255u ? 1u : req + 1u);
-        signal_cids(link, SIG_DISCONNECT_REQ, req, ls[link].ch[s].rcid, local_cid(link, s));
+        l->ch[s].state = CH_CLOSING;
+        l->ch[s].cfg = 0;
+        uint8_t req = l->next_id;
+        l->next_id = (uint8_t)(req == 255u ? 1u : req + 1u);
+        signal_cids(link, SIG_DISCONNECT_REQ, req, l->ch[s].rcid, local_cid(link, s));
     }
 }
 
 static bool on_disconnect_request(uint8_t link, uint8_t id, const uint8_t *p)
 {
+    l2cap_link_t *l = &ls[link];
     uint16_t dcid = le16(p), scid = le16(p + 2);
     uint8_t s = service_of(link, dcid);
-    if (s == L2CAP_SERVICES || ls[link].ch[s].rcid != scid) {
+    if (s == L2CAP_SERVICES || l->ch[s].rcid != scid) {
         if (!signal_begin(link, SIG_REJECT, id, 6))
             return false;
         hci_acl_put_u16(REJECT_INVALID_CID);
@@ -369,6 +385,7 @@ static bool on_info_request(uint8_t link, uint8_t id, uint16_t type)
 /* One signalling command. \return false when its answer found no room. */
 static bool on_signal(uint8_t link, uint8_t code, uint8_t id, const uint8_t *p, uint16_t n)
 {
+    l2cap_link_t *l = &ls[link];
     switch (code) {
     case SIG_CONNECT_REQ:
         if (n >= 4)
@@ -389,8 +406,8 @@ static bool on_signal(uint8_t link, uint8_t code, uint8_t id, const uint8_t *p, 
     case SIG_DISCONNECT_RSP:
         if (n >= 4) {
             uint8_t s = service_of(link, le16(p + 2));
-            if (s < L2CAP_SERVICES && ls[link].ch[s].state == CH_CLOSING)
-                ls[link].ch[s].state = CH_FREE;
+            if (s < L2CAP_SERVICES && l->ch[s].state == CH_CLOSING)
+                l->ch[s].state = CH_FREE;
         }
         return true;
     case SIG_ECHO_REQ:
@@ -420,15 +437,16 @@ static bool on_signal(uint8_t link, uint8_t code, uint8_t id, const uint8_t *p, 
 /* The commands of a signalling PDU, from the first one not handled yet. */
 static bool on_signalling(uint8_t link, const uint8_t *p, uint16_t n)
 {
+    l2cap_link_t *l = &ls[link];
     uint8_t k = 0;
     for (uint16_t i = 0; i + 4u <= n; k++) {
         uint16_t len = le16(p + i + 2);
         if (i + 4u + len > n)
             len = (uint16_t)(n - i - 4u); /* truncated: read as far as it goes */
-        if (k >= ls[link].sig_done) {
+        if (k >= l->sig_done) {
             if (!on_signal(link, p[i], p[i + 1], p + i + 4, len))
                 return false;
-            ls[link].sig_done = (uint8_t)(k + 1u);
+            l->sig_done = (uint8_t)(k + 1u);
         }
         i = (uint16_t)(i + 4u + len);
     }
@@ -440,9 +458,10 @@ static bool on_signalling(uint8_t link, const uint8_t *p, uint16_t n)
 /* Hands a complete PDU to its channel. \return false when an answer found no room (handle it again later). */
 static bool dispatch(uint8_t link)
 {
-    const uint8_t *p = ls[link].rx + HEADER;
-    uint16_t n = (uint16_t)(ls[link].rx_len - HEADER);
-    uint16_t cid = le16(ls[link].rx + 2);
+    l2cap_link_t *l = &ls[link];
+    const uint8_t *p = l->rx + HEADER;
+    uint16_t n = (uint16_t)(l->rx_len - HEADER);
+    uint16_t cid = le16(l->rx + 2);
     if (cid == CID_SIGNALLING)
         return on_signalling(link, p, n);
     uint8_t s = service_of(link, cid);
@@ -459,55 +478,58 @@ static bool dispatch(uint8_t link)
 
 static void handle(uint8_t link)
 {
+    l2cap_link_t *l = &ls[link];
     if (dispatch(link)) {
-        ls[link].rx_state = RX_IDLE;
-        ls[link].sig_done = 0;
+        l->rx_state = RX_IDLE;
+        l->sig_done = 0;
     } else {
-        ls[link].rx_state = RX_PENDING;
+        l->rx_state = RX_PENDING;
         waiting = 1;
     }
 }
 
 uint8_t *l2cap_rx_fragment(uint8_t link, bool start, uint16_t len)
 {
-    if (ls[link].rx_state == RX_PENDING) {
+    l2cap_link_t *l = &ls[link];
+    if (l->rx_state == RX_PENDING) {
         robot_state.errors.bt_dropped++; /* the previous PDU still waits for room to answer */
         return NULL;
     }
     if (start) {
-        if (ls[link].rx_state == RX_ASSEMBLING)
+        if (l->rx_state == RX_ASSEMBLING)
             robot_state.errors.bt_dropped++; /* the last one never ended */
-        ls[link].rx_state = RX_ASSEMBLING;
-        ls[link].rx_len = 0;
-    } else if (ls[link].rx_state != RX_ASSEMBLING) {
+        l->rx_state = RX_ASSEMBLING;
+        l->rx_len = 0;
+    } else if (l->rx_state != RX_ASSEMBLING) {
         return NULL; /* the rest of a PDU already dropped (or counted as never started below) */
     }
-    if (ls[link].rx_len + len > sizeof ls[link].rx) {
+    if (l->rx_len + len > sizeof l->rx) {
         robot_state.errors.bt_dropped++; /* longer than the MTU */
-        ls[link].rx_state = RX_IDLE;
+        l->rx_state = RX_IDLE;
         return NULL;
     }
-    ls[link].rx_frag = len;
-    return ls[link].rx + ls[link].rx_len;
+    l->rx_frag = len;
+    return l->rx + l->rx_len;
 }
 
 void l2cap_rx_fragment_done(uint8_t link)
 {
-    uint16_t got = (uint16_t)(ls[link].rx_len + ls[link].rx_frag);
-    ls[link].rx_len = got;
+    l2cap_link_t *l = &ls[link];
+    uint16_t got = (uint16_t)(l->rx_len + l->rx_frag);
+    l->rx_len = got;
     if (got < HEADER)
         return;
-    uint16_t total = (uint16_t)(HEADER + le16(ls[link].rx));
-    if (total > sizeof ls[link].rx) { /* longer than the MTU: its other fragments are dropped unseen */
+    uint16_t total = (uint16_t)(HEADER + le16(l->rx));
+    if (total > sizeof l->rx) { /* longer than the MTU: its other fragments are dropped unseen */
         robot_state.errors.bt_dropped++;
-        ls[link].rx_state = RX_IDLE;
+        l->rx_state = RX_IDLE;
         return;
     }
     if (got < total)
         return;
     if (got > total) { /* more fragments than the length said */
         robot_state.errors.bt_dropped++;
-        ls[link].rx_state = RX_IDLE;
+        l->rx_state = RX_IDLE;
         return;
     }
     handle(link);

@@ -24,7 +24,7 @@
 #define RFCOMM_IDLE_BACKLOG 16u
 /** Information bytes of a frame written into the transmit ring per tick: a long frame takes a few ticks (the wire
  *  needs 10 ms for it anyway), so no tick pays for all of it. */
-#define RFCOMM_SLICE 24u
+#define RFCOMM_SLICE 16u
 
 void rfcomm_init(void);
 

@@ -147,39 +147,26 @@ static bool record_has(const HAL_FLASH record_t *r, uint32_t uuid)
     return false;
 }
 
-/* \return whether the record holds every UUID of the search pattern (a sequence of UUIDs at p, checked). */
-static bool record_matches(const HAL_FLASH record_t *r, const uint8_t *p, const de_t *pattern)
-{
-    const uint8_t *e = p + pattern->head;
-    uint16_t left = pattern->len;
-    while (left) {
-        de_t u;
-        if (!de_read(e, left, &u) || u.type != DE_UUID)
-            return false;
-        if (!record_has(r, uuid_of(e, &u)))
-            return false;
-        e += u.head + u.len;
-        left = (uint16_t)(left - u.head - u.len);
-    }
-    return true;
-}
-
-/* \return whether a search pattern is a sequence of 1..12 UUIDs of 2, 4 or 16 bytes. */
-static bool pattern_valid(const uint8_t *p, const de_t *pattern)
+/* Matches a search pattern (a sequence of 1..12 UUIDs of 2, 4 or 16 bytes at p) against the record `r`, or
+ * only checks it (r NULL). \return 1 when the record holds every UUID, 0 when not, -1 when the pattern is not one. */
+static int8_t record_matches(const HAL_FLASH record_t *r, const uint8_t *p, const de_t *pattern)
 {
     if (pattern->type != DE_SEQUENCE || pattern->len == 0)
-        return false;
+        return -1;
     const uint8_t *e = p + pattern->head;
     uint16_t left = pattern->len;
     uint8_t count = 0;
+    int8_t match = 1;
     while (left) {
         de_t u;
         if (!de_read(e, left, &u) || u.type != DE_UUID || (u.len != 2 && u.len != 4 && u.len != 16) || ++count > 12)
-            return false;
+            return -1;
+        if (r && !record_has(r, uuid_of(e, &u)))
+            match = 0;
         e += u.head + u.len;
         left = (uint16_t)(left - u.head - u.len);
     }
-    return true;
+    return match;
 }
 
 /* \return whether an attribute id list (a sequence of 16-bit ids and 32-bit ranges) is well formed. */
@@ -281,18 +268,21 @@ static uint16_t out_record(const HAL_FLASH record_t *r, const uint8_t *p, const 
 
 /* ---- requests ---- */
 
+/* Starts an answer (after the room for all of it was found): PDU id, transaction id, parameter length, and the
+ * first two parameter bytes (`first`). */
+static void answer_begin(uint8_t link, uint8_t pdu, uint16_t tid, uint16_t params, uint16_t first)
+{
+    uint8_t h[7] = {pdu, (uint8_t)(tid >> 8), (uint8_t)tid, (uint8_t)(params >> 8), (uint8_t)params,
+                    (uint8_t)(first >> 8), (uint8_t)first};
+    l2cap_begin(link, L2CAP_SDP, (uint16_t)(5u + params));
+    hci_acl_put(h, 7);
+}
+
 static bool send_error(uint8_t link, uint16_t tid, uint16_t code)
 {
     if (!l2cap_can_send(link, L2CAP_SDP, 7, false))
         return false;
-    l2cap_begin(link, L2CAP_SDP, 7);
-    hci_acl_put_byte(SDP_ERROR_RSP);
-    hci_acl_put_byte((uint8_t)(tid >> 8));
-    hci_acl_put_byte((uint8_t)tid);
-    hci_acl_put_byte(0);
-    hci_acl_put_byte(2);
-    hci_acl_put_byte((uint8_t)(code >> 8));
-    hci_acl_put_byte((uint8_t)code);
+    answer_begin(link, SDP_ERROR_RSP, tid, 2, code);
     hci_acl_end();
     return true;
 }
@@ -300,28 +290,21 @@ static bool send_error(uint8_t link, uint16_t tid, uint16_t code)
 static bool on_search(uint8_t link, uint16_t tid, const uint8_t *p, uint16_t n)
 {
     de_t pattern;
-    if (!de_read(p, n, &pattern) || !pattern_valid(p, &pattern) || n < pattern.head + pattern.len + 3u)
+    if (!de_read(p, n, &pattern) || record_matches(NULL, p, &pattern) < 0 || n < pattern.head + pattern.len + 3u)
         return send_error(link, tid, ERR_BAD_SYNTAX);
     uint16_t max = be16(p + pattern.head + pattern.len);
     uint8_t count = 0;
     bool match[RECORDS];
     for (uint8_t i = 0; i < RECORDS; i++) {
-        match[i] = count < max && record_matches(&records[i], p, &pattern);
+        match[i] = count < max && record_matches(&records[i], p, &pattern) > 0;
         count = (uint8_t)(count + match[i]);
     }
     uint16_t params = (uint16_t)(4u + 4u * count + 1u);
     if (!l2cap_can_send(link, L2CAP_SDP, (uint16_t)(5u + params), false))
         return false;
-    l2cap_begin(link, L2CAP_SDP, (uint16_t)(5u + params));
-    hci_acl_put_byte(SDP_SEARCH_RSP);
-    hci_acl_put_byte((uint8_t)(tid >> 8));
-    hci_acl_put_byte((uint8_t)tid);
-    hci_acl_put_byte((uint8_t)(params >> 8));
-    hci_acl_put_byte((uint8_t)params);
-    for (uint8_t k = 0; k < 2; k++) { /* total and current counts: one part */
-        hci_acl_put_byte(0);
-        hci_acl_put_byte(count);
-    }
+    answer_begin(link, SDP_SEARCH_RSP, tid, params, count); /* the total count, then the count in this part */
+    hci_acl_put_byte(0);
+    hci_acl_put_byte(count);
     for (uint8_t i = 0; i < RECORDS; i++)
         if (match[i]) {
             uint32_t h = records[i].handle;
@@ -341,7 +324,7 @@ static bool on_attributes(uint8_t link, uint8_t pdu, uint16_t tid, const uint8_t
     uint16_t i = 0;
     uint8_t only = RECORDS; /* the record of a ServiceAttribute request */
     if (search) {
-        if (!de_read(p, n, &pattern) || !pattern_valid(p, &pattern))
+        if (!de_read(p, n, &pattern) || record_matches(NULL, p, &pattern) < 0)
             return send_error(link, tid, ERR_BAD_SYNTAX);
         i = (uint16_t)(pattern.head + pattern.len);
     } else {
@@ -375,7 +358,7 @@ static bool on_attributes(uint8_t link, uint8_t pdu, uint16_t tid, const uint8_t
     bool match[RECORDS];
     uint16_t inner = 0;
     for (uint8_t r = 0; r < RECORDS; r++) {
-        match[r] = search ? record_matches(&records[r], p, &pattern) : r == only;
+        match[r] = search ? record_matches(&records[r], p, &pattern) > 0 : r == only;
         if (match[r])
             inner = (uint16_t)(inner + out_record(&records[r], ids, &list, NULL));
     }
@@ -396,14 +379,7 @@ static bool on_attributes(uint8_t link, uint8_t pdu, uint16_t tid, const uint8_t
     uint16_t params = (uint16_t)(2u + count + (more ? 3u : 1u));
     if (!l2cap_can_send(link, L2CAP_SDP, (uint16_t)(5u + params), false))
         return false;
-    l2cap_begin(link, L2CAP_SDP, (uint16_t)(5u + params));
-    hci_acl_put_byte((uint8_t)(pdu + 1u));
-    hci_acl_put_byte((uint8_t)(tid >> 8));
-    hci_acl_put_byte((uint8_t)tid);
-    hci_acl_put_byte((uint8_t)(params >> 8));
-    hci_acl_put_byte((uint8_t)params);
-    hci_acl_put_byte((uint8_t)(count >> 8));
-    hci_acl_put_byte((uint8_t)count);
+    answer_begin(link, (uint8_t)(pdu + 1u), tid, params, count);
     out_t o = {0, offset, (uint16_t)(offset + count)};
     if (search)
         out_sequence_header(&o, inner);
