@@ -125,7 +125,7 @@ static uint32_t enc_t[2];
 
 /* Host and IR traffic of a scenario: none, what the links can physically carry, or every tick (stress); or the
  * IR of the track behaviour: another robot's beacons and messages, or our own beacon reflected (an obstacle). */
-enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS, CHATTER_TRACK, CHATTER_OBSTACLE };
+enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS, CHATTER_TRACK, CHATTER_OBSTACLE, CHATTER_HOST };
 #define IR_MESSAGE_MS 42u
 
 /* One tick's tasks with a timer reading between two (a 16-bit read each); the arithmetic comes after the tick, so
@@ -191,11 +191,11 @@ static void one_tick(uint8_t moving, uint8_t chatter)
         uint32_t ms = bench_us / 1000u;
         hal_ir_msg_t m = {7, 2, 50, 4, {1, 2, 3, 4, 0, 0, 0, 0}};
         m.data[0] = (uint8_t)bench_us;
-        if (chatter == CHATTER_STRESS || ms % IR_MESSAGE_MS == 0)
+        if (chatter == CHATTER_STRESS || (chatter == CHATTER_LINKS && ms % IR_MESSAGE_MS == 0))
             ir_rx_isr(0, &m);
         m.power = 25;
-        if (chatter == CHATTER_STRESS || ms % IR_MESSAGE_MS == IR_MESSAGE_MS / 2)
-            ir_rx_isr(1, &m);
+        if (chatter == CHATTER_STRESS || (chatter == CHATTER_LINKS && ms % IR_MESSAGE_MS == IR_MESSAGE_MS / 2))
+            ir_rx_isr(1, &m); /* CHATTER_HOST: the host's packets only */
         static const uint8_t hb[] = {0xC0, 0x11, 0x00, 0x00, 0xCF, 0xB8, 0xC0};
 #ifdef LINK_HCI
         if (bench_bt_idle()) /* as fast as the wire carries them */
@@ -296,8 +296,31 @@ static void bluetooth_up(void)
 }
 #endif
 
+/* Stack painting: the RAM between the static data and the stack is filled with a pattern before anything runs,
+ * and the deepest byte the stack overwrote is found at the end (the bench's own frames, the tasks and the scheduler
+ * interrupts included). */
+#define PAINT 0xA5u
+extern uint8_t __heap_start;
+
+static void paint_stack(void)
+{
+    uint8_t *p = &__heap_start;
+    uint8_t *end = (uint8_t *)SP - 64; /* this function's frame and a margin */
+    while (p < end)
+        *p++ = PAINT;
+}
+
+static uint16_t stack_depth(void)
+{
+    const uint8_t *p = &__heap_start;
+    while (*p == PAINT && p < (const uint8_t *)RAMEND)
+        p++;
+    return (uint16_t)(RAMEND - (uint16_t)p + 1u);
+}
+
 int main(void)
 {
+    paint_stack();
     UBRR0 = 0;
     UCSR0B = (1 << TXEN0);
     TCCR1A = 0;
@@ -348,7 +371,7 @@ int main(void)
     settings.sync.period_ms = 12;
     move.id = 4;
     locomotion_straight(&move, &detail);
-    run(400, 1, CHATTER_LINKS);
+    run(400, 1, CHATTER_HOST);
     report("Bluetooth: a movement, full state every 12 ms over RFCOMM (what the wire carries), host packets");
 #endif
     uint32_t realistic = worst_tick;
@@ -366,6 +389,11 @@ int main(void)
     out_s("BENCH: scheduler interrupts (line sensor phases, beacons), worst: ");
     out_u(isr_max, 1);
     out_s(" cycles\n");
+    out_s("BENCH: stack at most ");
+    out_u(stack_depth(), 1);
+    out_s(" bytes deep (static RAM ends at ");
+    out_u((uint16_t)&__heap_start - RAMSTART, 1);
+    out_s(" bytes)\n");
     out_s("BENCH: WORST TICK (all but the stress scenario) ");
     out_u(realistic, 1);
     out_s(" cycles =");
