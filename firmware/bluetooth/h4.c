@@ -160,7 +160,7 @@ void h4_tx_byte(uint8_t b)
     tx_pos = uart_tx_store(tx_pos, b);
 }
 
-void h4_tx_u16(uint16_t v)
+static void h4_tx_u16(uint16_t v)
 {
     tx_pos = uart_tx_store(tx_pos, (uint8_t)v);
     tx_pos = uart_tx_store(tx_pos, (uint8_t)(v >> 8));

@@ -81,7 +81,6 @@ uint8_t h4_tx_backlog(void);
 /** Starts writing; the caller checked h4_tx_room() for everything it will write before h4_tx_end(). */
 void h4_tx_begin(void);
 void h4_tx_byte(uint8_t b);
-void h4_tx_u16(uint16_t v);
 void h4_tx_bytes(const uint8_t *p, uint16_t n);
 void h4_tx_zeros(uint16_t n);
 /** Publishes what was written to the USART interrupt (at packet boundaries) and starts it; the write may go on. */
