@@ -1,15 +1,7 @@
 #include "bt_wire.h"
 
-#include <arpa/inet.h>
-#include <errno.h>
-#include <fcntl.h>
-#include <netinet/in.h>
-#include <netinet/tcp.h>
 #include <stdio.h>
 #include <string.h>
-#include <sys/socket.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "bluetooth/h4.h"
 #include "bluetooth/hci.h"
@@ -18,6 +10,7 @@
 #include "core/data.h"
 #include "drivers/eeprom.h"
 #include "drivers/uart.h"
+#include "bt_live.h"
 #include "hal/hal.h"
 
 wire_packet_t wire_out[256];
@@ -426,61 +419,27 @@ void bt_framed_closed(uint8_t link, bool lost)
 
 /* ---- live: the stack against a controller over TCP, in real time ---- */
 
-static uint64_t now_us(void)
+static void live_rx(const uint8_t *p, uint16_t n)
 {
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (uint64_t)t.tv_sec * 1000000u + (uint64_t)t.tv_nsec / 1000u;
+    wire_feed(p, n);
+}
+
+static int live_tx(uint8_t *p, int max)
+{
+    int n = 0;
+    int16_t b;
+    while (n < max && (b = uart_tx_isr()) >= 0)
+        p[n++] = (uint8_t)b;
+    return n;
 }
 
 int wire_live(int port, int seconds)
 {
-    int s = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {0};
-    a.sin_family = AF_INET;
-    a.sin_port = htons((uint16_t)port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (s < 0 || connect(s, (struct sockaddr *)&a, sizeof a) != 0) {
-        perror("connect");
-        return 1;
-    }
-    int one = 1;
-    setsockopt(s, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    fcntl(s, F_SETFL, O_NONBLOCK);
+    static const bt_live_robot_t robot = {live_rx, tick, live_tx};
     wire_reset();
     wire_echo = true;
-    uint64_t start = now_us(), next = start;
-    static uint8_t in[4096]; /* what the controller sent, fed to the UART at its baud rate */
-    size_t in_len = 0, in_pos = 0;
-    while (now_us() - start < (uint64_t)seconds * 1000000u) {
-        if (in_pos == in_len)
-            in_pos = in_len = 0;
-        ssize_t n = in_len < sizeof in ? read(s, in + in_len, sizeof in - in_len) : -1;
-        if (n == 0)
-            break; /* the controller went away */
-        if (n > 0)
-            in_len += (size_t)n;
-        else if (errno != EAGAIN && in_len < sizeof in)
-            break;
-        if (now_us() >= next) {
-            next += 1000;
-            /* 115200 Bd: about 12 bytes per ms each way */
-            size_t k = in_len - in_pos > 12 ? 12 : in_len - in_pos;
-            wire_feed(in + in_pos, (uint16_t)k);
-            in_pos += k;
-            tick();
-            uint8_t out[12];
-            int m = 0;
-            int16_t b;
-            while (m < 12 && (b = uart_tx_isr()) >= 0)
-                out[m++] = (uint8_t)b;
-            if (m && write(s, out, (size_t)m) != m)
-                break;
-        } else {
-            usleep(100);
-        }
-    }
-    close(s);
+    if (bt_live_run(port, seconds, &robot))
+        return 1;
     printf("live: wire %u timeouts %u resets %u dropped %u\n", robot_state.errors.bt_wire,
            robot_state.errors.bt_timeouts, robot_state.errors.bt_resets, robot_state.errors.bt_dropped);
     return 0;
