@@ -46,6 +46,7 @@ FRAMED_SERVICE_UUID = core.UUID('6e2a6f10-5b1e-4c3a-9a4e-70b0c4e7b001')
 # Robots' controllers are 00:B0:7B:00:00:<index>, the gateway's 00:B0:7B:00:00:00.
 ADDRESS_PREFIX = '00:B0:7B:00:00:'
 PAGE_TIMEOUT_S = 5.12  # the HCI default (0x2000 slots)
+CONNECTION_ACCEPT_TIMEOUT_S = 5.0  # the HCI default (0x1F40 slots)
 SUPERVISION_TIMEOUT = hci.HCI_ErrorCode.CONNECTION_TIMEOUT_ERROR
 # The gateway's L2CAP MTU for the framed channel: any PocketBot frame (at most 125 bytes) fits.
 FRAMED_MTU = 512
@@ -55,8 +56,10 @@ log = logging.getLogger('virtual_bluetooth')
 
 
 class VirtualController(Controller):
-    """A Bumble controller that a page reaches only while its host has page scan on, as on a real controller, and
-    whose ACL buffers are those of a typical BR/EDR module instead of Bumble's LE-sized 27 bytes."""
+    """A Bumble controller that behaves as a real one where PocketBot's stack depends on it: a page reaches it only
+    while its host has page scan on, a connection request its host leaves unanswered is refused after the
+    Connection Accept Timeout (Bumble's would wait forever), and its ACL buffers are those of a typical BR/EDR
+    module instead of Bumble's LE-sized 27 bytes."""
 
     def __init__(self, name, link, address, acl_length, acl_packets):
         super().__init__(name, link=link, public_address=address)
@@ -64,11 +67,25 @@ class VirtualController(Controller):
         self.total_num_acl_data_packets = acl_packets
 
     def on_lmp_packet(self, sender_address, packet):
-        if isinstance(packet, lmp.LmpHostConnectionReq) and not (self.classic_scan_enable & 0x02):
-            self.send_lmp_packet(sender_address, lmp.LmpNotAccepted(
-                lmp.Opcode.LMP_HOST_CONNECTION_REQ, hci.HCI_ErrorCode.PAGE_TIMEOUT_ERROR))
-            return
+        if isinstance(packet, lmp.LmpHostConnectionReq):
+            if not self.classic_scan_enable & 0x02:
+                self.refuse(sender_address, hci.HCI_ErrorCode.PAGE_TIMEOUT_ERROR)
+                return
+            asyncio.get_running_loop().call_later(CONNECTION_ACCEPT_TIMEOUT_S, self.accept_timeout, sender_address)
         super().on_lmp_packet(sender_address, packet)
+
+    def refuse(self, pager, reason):
+        self.send_lmp_packet(pager, lmp.LmpNotAccepted(lmp.Opcode.LMP_HOST_CONNECTION_REQ, reason))
+
+    def accept_timeout(self, pager):
+        connection = self.classic_connections.get(pager)
+        if connection is None or connection.handle != 0:  # accepted (it has a handle), refused or gone meanwhile
+            return
+        del self.classic_connections[pager]
+        self.refuse(pager, hci.HCI_ErrorCode.CONNECTION_ACCEPT_TIMEOUT_ERROR)
+        self.send_hci_packet(hci.HCI_Connection_Complete_Event(
+            status=hci.HCI_ErrorCode.CONNECTION_ACCEPT_TIMEOUT_ERROR, connection_handle=0, bd_addr=pager,
+            link_type=hci.HCI_Connection_Complete_Event.LinkType.ACL, encryption_enabled=0))
 
 
 class H4Port:
@@ -146,8 +163,10 @@ class Bridge:
                 if asyncio.get_running_loop().time() < self.out_of_reach_until:
                     raise core.ConnectionError(hci.HCI_ErrorCode.PAGE_TIMEOUT_ERROR, core.PhysicalTransport.BR_EDR,
                                                self.address, 'hci', 'page timeout: the robot is out of reach')
-                connection = await self.device.connect(self.address, transport=core.PhysicalTransport.BR_EDR,
-                                                       timeout=PAGE_TIMEOUT_S)
+                # Bounded here too: Bumble's own timeout waits for a Create_Connection_Cancel its controller lacks.
+                connection = await asyncio.wait_for(self.device.connect(
+                    self.address, transport=core.PhysicalTransport.BR_EDR, timeout=PAGE_TIMEOUT_S),
+                    PAGE_TIMEOUT_S + CONNECTION_ACCEPT_TIMEOUT_S)
                 connection.on('disconnection', lambda reason: self.on_disconnection(connection, reason))
                 self.connection = connection
                 self.mux = None
@@ -177,7 +196,7 @@ class Bridge:
         try:
             channel = await (self.open_rfcomm() if kind == 'rfcomm' else self.open_l2cap())
         except Exception as e:
-            log.warning('%s: cannot open %s: %r', self.address, kind, e)
+            log.warning('%s: cannot open %s: %s', self.address, kind, describe(e))
             writer.close()
             await self.release_if_idle()
             return
@@ -239,6 +258,12 @@ class Bridge:
         except Exception as e:
             log.info('%s: closing %s: %r', self.address, kind, e)
         await self.release_if_idle()
+
+
+def describe(error):
+    """Bumble's errors often print as `ConnectionError()`: their name and code say more."""
+    name = getattr(error, 'error_name', '') or str(error)
+    return f'{type(error).__name__} {name}'.strip()
 
 
 async def find_framed_psm(connection):
