@@ -17,6 +17,13 @@ void harness_run(const char *name, void (*fn)(void))
     }
 }
 
+int harness_report(void)
+{
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed ? 1 : 0;
+}
+
+#ifndef HARNESS_NO_MAIN
 int main(int argc, char **argv)
 {
     if (argc == 3 && strcmp(argv[1], "--write-corpus") == 0) {
@@ -37,6 +44,7 @@ int main(int argc, char **argv)
     suite_debug();
     suite_scheduler();
     suite_track();
-    printf("%d passed, %d failed\n", passed, failed);
-    return failed ? 1 : 0;
+    suite_links();
+    return harness_report();
 }
+#endif

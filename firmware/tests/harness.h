@@ -22,6 +22,8 @@ extern int harness_failed_checks;
 
 #define RUN(fn) harness_run(#fn, fn)
 void harness_run(const char *name, void (*fn)(void));
+/** Prints "N passed, N failed". \return the exit status. */
+int harness_report(void);
 
 /* The suites, one per test file. */
 void suite_frame(void);
@@ -38,6 +40,14 @@ void suite_sensors(void);
 void suite_debug(void);
 void suite_scheduler(void);
 void suite_track(void);
+void suite_links(void);
+
+/* The Bluetooth stack's suites (bt_tests: the stack below comm, with tests/bt_wire.c as its controller). */
+void suite_bt_h4(void);
+void suite_bt_hci(void);
+void suite_bt_l2cap(void);
+void suite_bt_sdp(void);
+void suite_bt_rfcomm(void);
 
 /** Writes the golden frames (SLIPped) as fuzz corpus files into `dir`. */
 void golden_write_corpus(const char *dir);
