@@ -145,7 +145,8 @@ class Pipe:
             return
         self.closed.set_result(None)
         self.writer.close()
-        asyncio.get_running_loop().create_task(self.closer())
+        # Kept: asyncio holds only a weak reference to a task, which could vanish before closing the channel.
+        self.closing = asyncio.get_running_loop().create_task(self.closer())
 
 
 class Bridge:

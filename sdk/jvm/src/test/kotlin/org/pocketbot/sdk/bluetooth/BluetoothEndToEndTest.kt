@@ -118,18 +118,23 @@ class BluetoothEndToEndTest {
     fun garbageAndALostByteOnTheH4WireAreSurvived() {
         H4Proxy(bt.controllers[0].h4).use { proxy ->
             withRobots(1, wire = { proxy.endpoint }) { emu ->
-                val robot = connect(0, TcpFraming.SLIP)
+                val robot = connect(0, TcpFraming.LENGTH_PREFIXED)
                 val sim = emu.robots[0]
                 robot.reflector.set(SyncMode.FULL, 20.milliseconds)
                 proxy.injectGarbage(ByteArray(40) { (it * 37 + 5).toByte() })
                 delay(3.seconds)
                 proxy.dropAByte()
                 delay(3.seconds)
-                // Whatever the wire did, the robot is reachable again and the SDK's mirror is the robot's truth.
+                // The robot saw both, reset its controller and took the host back; the SDK is connected again.
+                val errors = sim.state().errors
+                assertTrue(errors.btWire + errors.btTimeouts >= 2 && errors.btResets >= 2, "the robot counts what the wire did: $errors")
                 robot.connection.first { it == ConnectionState.Connected }
                 assertTruthful(drive(robot, sim, Movement.Straight(0.04, 0.1)), MovementOutcome.FINISHED)
                 robot.settings.linePid.kp.set(1.25)
                 assertEquals(1.25, valueIn(sim.settingsBytes(), "line_pid.kp"))
+                // The SDK's mirror says what the robot counted.
+                val counted = sim.state().errors.btResets
+                robot.stateUpdates.first { it.kind == StateUpdate.Kind.FULL && robot.state.value.errors.btResets == counted }
                 robot.close()
             }
         }
