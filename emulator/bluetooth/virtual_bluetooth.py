@@ -36,8 +36,7 @@ from bumble.device import Device, DeviceConfiguration
 from bumble.host import Host
 from bumble.keys import MemoryKeyStore
 from bumble.link import LocalLink
-from bumble.transport.common import AsyncPipeSink
-from bumble.transport.tcp_server import open_tcp_server_transport_with_socket
+from bumble.transport.common import AsyncPipeSink, PacketParser
 
 # What the firmware serves (firmware/bluetooth/bt_config.h): SPP on an RFCOMM channel, and PocketBot frames on an L2CAP PSM
 # announced by an SDP record with this service class.
@@ -104,25 +103,48 @@ class VirtualController(Controller):
 
 
 class H4Port:
-    """One robot's controller behind an H4 TCP server; reset() swaps in a fresh controller on the same port."""
+    """One robot's controller behind an H4 TCP server. The newest client is the robot's UART: an older connection's
+    late end does not cut it off (Bumble's own TCP server transport shares one sink between its connections).
+    reset() swaps in a fresh controller on the same port."""
 
     def __init__(self, index, link, args):
         self.index = index
         self.link = link
         self.args = args
         self.address = hci.Address(f'{ADDRESS_PREFIX}{index:02X}', hci.Address.PUBLIC_DEVICE_ADDRESS)
-        self.transport = None
+        self.writer = None
         self.controller = None
+        self._new_controller()
 
     async def start(self, sock):
-        self.transport = await open_tcp_server_transport_with_socket(sock)
-        self._new_controller()
+        self.server = await asyncio.start_server(self.serve, sock=sock)
+
+    async def serve(self, reader, writer):
+        if self.writer is not None:
+            self.writer.close()
+        self.writer = writer
+        parser = PacketParser(FromRobot(self))
+        try:
+            while data := await reader.read(4096):
+                try:
+                    parser.feed_data(data)
+                except core.InvalidPacketError as e:  # a bad packet type: the parser starts over, as a controller's
+                    log.info('controller %d: %s', self.index, e)
+        except ConnectionError:
+            pass
+        finally:
+            if self.writer is writer:
+                self.writer = None
+            writer.close()
 
     def _new_controller(self):
         self.controller = VirtualController(f'robot-{self.index}', self.link, self.address,
                                             self.args.acl_length, self.args.acl_packets)
-        self.transport.source.set_packet_sink(self.controller)
-        self.controller.host = self.transport.sink
+        self.controller.host = self
+
+    def on_packet(self, packet):  # the controller's, to the robot
+        if self.writer is not None:
+            self.writer.write(packet)
 
     def reset(self):
         old = self.controller
@@ -130,6 +152,16 @@ class H4Port:
         old.host = None
         self.link.remove_controller(old)
         self._new_controller()
+
+
+class FromRobot:
+    """Where the H4 parser puts the robot's packets: the port's controller of the moment."""
+
+    def __init__(self, port):
+        self.port = port
+
+    def on_packet(self, packet):
+        self.port.controller.on_packet(packet)
 
 
 class Pipe:

@@ -20,13 +20,15 @@ internal class H4Uart(private val link: RobotLink, private val controller: InetS
     @Volatile private var closed = false
     @Volatile private var socket: Socket? = null
     private val out = LinkedBlockingQueue<ByteArray>()
-    private val thread = Thread({ run() }, "emulator-h4-$label").apply { isDaemon = true; start() }
 
     /** The link's side: bytes the firmware sent reach [onBytes] on the stepping thread, which must not block. */
     private val connection = object : LinkConnection {
         override fun onBytes(bytes: ByteArray) { out.add(bytes) }
         override fun onLinkLost(reason: String) { runCatching { socket?.close() } }
     }
+
+    // Last: the thread uses everything above.
+    private val thread = Thread({ run() }, "emulator-h4-$label").apply { isDaemon = true; start() }
 
     private fun run() {
         while (!closed) {

@@ -4,9 +4,9 @@ import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.delay
 import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeoutOrNull
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.EmulatorConfig
-import org.pocketbot.emulator.RobotHandle
 import org.pocketbot.emulator.Speed
 import org.pocketbot.emulator.bluetooth.VirtualBluetooth
 import org.pocketbot.emulator.firmware.FirmwareImage
@@ -15,6 +15,7 @@ import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.StateUpdate
 import org.pocketbot.sdk.connect
 import org.pocketbot.sdk.transport.TcpFraming
 import org.pocketbot.sdk.transport.TcpRobotDevice
@@ -35,7 +36,7 @@ fun main(args: Array<String>) {
     val uart = Emulator.local(1).use { emu ->
         emu.start(Speed.Realtime(1.0))
         val port = emu.robots[0].startTcp()
-        measure("uart", emu.robots[0], TcpRobotDevice("127.0.0.1", port), seconds)
+        measure("uart", emu, TcpRobotDevice("127.0.0.1", port), seconds)
     }
     // 11 520 bytes a second at 115200 Bd (8N1); a full state frame is 3 + payload + 2 bytes plus two SLIP ENDs.
     val uartWire = 115_200 / 10.0 / (ProtocolInfo.STATE_SIZE + 7)
@@ -46,7 +47,7 @@ fun main(args: Array<String>) {
             Emulator.local(1, config = EmulatorConfig(firmware = FirmwareImage.compiledHci())).use { emu ->
                 emu.robots[0].attachH4(bt.controllers[0].h4)
                 emu.start(Speed.Realtime(1.0))
-                val rate = measure(kind, emu.robots[0], TcpRobotDevice(at.hostString, at.port, framing = framing), seconds)
+                val rate = measure(kind, emu, TcpRobotDevice(at.hostString, at.port, framing = framing), seconds)
                 line("${kind}_share_of_uart", "%.1f%%".format(100 * rate / uart))
                 line("${kind}_framing_cost", "%.1f%%".format(100 * (1 - rate / uart)))
             }
@@ -57,19 +58,23 @@ fun main(args: Array<String>) {
 
 /**
  * Connects, asks for full state every millisecond (the robot then sends as fast as its UART drains), and counts the
- * full states the SDK receives in [seconds]; prints them a second and the robot's UART bytes per state.
+ * full states the SDK receives in about [seconds]; prints them per second of the robot's own clock (the time each
+ * state carries: a busy machine may let the emulator lag behind the wall clock and catch up in a burst), and the
+ * robot's UART bytes per state.
  */
-private fun measure(kind: String, sim: RobotHandle, device: TcpRobotDevice, seconds: Int): Double = runBlocking(Dispatchers.Default) {
+private fun measure(kind: String, emu: Emulator, device: TcpRobotDevice, seconds: Int): Double = runBlocking(Dispatchers.Default) {
+    val sim = emu.robots[0]
     val robot = connectWhenReachable(device)
     robot.reflector.set(SyncMode.FULL, 1.milliseconds)
     delay(1.seconds) // the stream settles
-    val states0 = robot.linkStats.value.fullStates
+    val times = ArrayList<Long>()
     val bytes0 = sim.linkBytesToHost
-    val t0 = TimeSource.Monotonic.markNow()
-    delay(seconds.seconds)
-    val states = robot.linkStats.value.fullStates - states0
+    withTimeoutOrNull(seconds.seconds) {
+        robot.stateUpdates.collect { if (it.kind == StateUpdate.Kind.FULL) times += it.timeMs }
+    }
     val uartBytes = sim.linkBytesToHost - bytes0
-    val rate = states / (t0.elapsedNow().inWholeMicroseconds / 1e6)
+    val states = times.size - 1
+    val rate = states / ((times.last() - times.first()) / 1000.0)
     line("${kind}_states_per_s", "%.1f".format(rate))
     line("${kind}_uart_bytes_per_state", "%.1f".format(uartBytes.toDouble() / states.coerceAtLeast(1)))
     line("${kind}_dropped_frames", robot.linkStats.value.dropped.toString())
