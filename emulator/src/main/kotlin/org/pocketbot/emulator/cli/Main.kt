@@ -68,6 +68,8 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         val w = try { Worlds.load(world) } catch (e: Exception) { throw UsageError("cannot load world $world: ${e.message}", "--world") }
         val hci = link == "hci"
         if (h4.isNotEmpty() && !hci) throw UsageError("--h4 needs --link hci", "--h4")
+        // A Bluetooth controller answers on the wall clock: the robot's firmware must run on it too.
+        if (hci && pace != Speed.Realtime(1.0)) throw UsageError("--link hci runs at --speed 1 only (controllers keep real time)", "--speed")
         if (h4.isNotEmpty() && h4.size != robots) throw UsageError("--h4 names ${h4.size} controller(s) for $robots robot(s)", "--h4")
         val firmware = if (hci) {
             try { FirmwareImage.compiledHci() } catch (e: IllegalStateException) { throw CliktError(e.message) }
