@@ -22,6 +22,7 @@ void hal_init(void) { bench_set_line_spot(bench_line_spot); }
 void hal_irq_enable(void) { sei(); }
 uint8_t hal_board_id(void) { return 0; }
 void hal_idle(void) {}
+void hal_tick_done(void) {}
 
 uint8_t hal_irq_save(void)
 {
@@ -38,9 +39,9 @@ void hal_irq_restore(uint8_t saved)
 uint32_t hal_micros(void) { return bench_us; }
 uint32_t hal_capture_now(void) { return bench_us * 4u; }
 
-void hal_sched_arm(uint8_t ch, uint32_t at_us)
+void hal_sched_arm(uint8_t ch, uint32_t delay_us)
 {
-    sched_at[ch] = at_us;
+    sched_at[ch] = bench_us + delay_us;
     sched_armed |= (uint8_t)(1u << ch);
 }
 
