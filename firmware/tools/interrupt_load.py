@@ -17,7 +17,8 @@ import re
 import sys
 
 MODES = [("idle", "idle"), ("movement", "movement"), ("line following", "line_following"),
-         ("teleoperation", "teleoperation"), ("track", "track"), ("stress", "teleoperation")]
+         ("teleoperation", "teleoperation"), ("track", "track"), ("Bluetooth", "bluetooth"),
+         ("stress", "teleoperation")]
 
 
 def main():
