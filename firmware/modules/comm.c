@@ -846,8 +846,15 @@ void comm_link_rx(uint8_t link, const uint8_t *p, uint16_t n)
         return;
     }
     slip_decoder_t *rx = &links[link].rx;
-    while (n-- && links[link].drv != NULL)
-        rx_byte(link, rx, *p++);
+    while (n && links[link].drv != NULL) {
+        uint16_t k = slip_decode_plain(rx, p, n); /* the frame's body in bulk, its ENDs and escapes one by one */
+        p += k;
+        n = (uint16_t)(n - k);
+        if (n) {
+            rx_byte(link, rx, *p++);
+            n--;
+        }
+    }
 }
 
 /* The links whose received bytes comm_task() takes: each with rx_take, a batch at a time. */

@@ -46,6 +46,10 @@ void slip_decoder_init(slip_decoder_t *d);
  *  completes a broken one (slip_seen() and `overflow` tell how long it was and why, until the next call). */
 slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte);
 
+/** Takes the bytes of `p` that slip_decode() would only append to the frame (plain bytes inside a sound frame), in
+ *  one loop instead of a call each; stops at the first byte that needs slip_decode(). \return how many it took */
+uint16_t slip_decode_plain(slip_decoder_t *d, const uint8_t *p, uint16_t n);
+
 /** \return the size of `frame` once SLIP-encoded, both ENDs included. */
 uint16_t slip_encoded_size(const uint8_t *frame, uint16_t n);
 
