@@ -11,6 +11,8 @@
 /* Spot lit by each detector in the two lit phases: detector d sits between emitters d and d+1, spot 2d is
  * lit by emitter d and spot 2d+1 by emitter d+1. Phase A (emitters 0, 2, 4) lights spots 0, 3, 4, 7 of
  * detectors 0..3, phase B (emitters 1, 3) spots 1, 2, 5, 6 (see line_sensor_task()). */
+_Static_assert(LINE_PHASE_US <= HAL_SCHED_MAX_DELAY_US, "a phase is one compare of the scheduler's timer");
+
 #define EMITTERS_A 0x15u
 #define EMITTERS_B 0x0Au
 
@@ -60,7 +62,7 @@ static void step(void)
         return;
     }
     phase++;
-    scheduler_after(SCHED_CH_LINE, LINE_PHASE_US, step);
+    scheduler_after_short(SCHED_CH_LINE, LINE_PHASE_US, step);
 }
 
 static void start(void)
@@ -68,7 +70,7 @@ static void start(void)
     /* Emitters are off between acquisitions: convert the dark reading at once. */
     phase = 1;
     hal_line_convert();
-    scheduler_after(SCHED_CH_LINE, LINE_PHASE_US, step);
+    scheduler_after_short(SCHED_CH_LINE, LINE_PHASE_US, step);
 }
 
 void line_sensor_init(void)
