@@ -79,7 +79,7 @@ void speed_init(void)
 /* Two pulses in `ticks` capture ticks (> 0), as um per tick in Q32 (saturated at 1 um/tick = 4 m/s). */
 static uint32_t two_pulses_in(uint32_t ticks)
 {
-    uint32_t q = geo.k_m / ticks;
+    uint32_t q = fx_udiv(geo.k_m, ticks);
     return q > geo.q_max ? 0xFFFFFFFFul : fx_shl(q, geo.k_s);
 }
 

@@ -123,6 +123,23 @@ static void products_are_exact_for_every_exponent(void)
     }
 }
 
+static void divisions_are_exact(void)
+{
+    uint32_t x = 7;
+    for (int i = 0; i < 200000; i++) {
+        x = x * 1103515245u + 12345u;
+        uint32_t n = x ^ (x << 7), d = (x >> (i % 32)) | 1u;
+        if (i % 7 == 0)
+            n = 0xFFFFFFFFu >> (i % 5);
+        if (fx_udiv(n, d) != n / d) {
+            CHECK(0, "%u / %u = %u, fx_udiv says %u", n, d, n / d, fx_udiv(n, d));
+            return;
+        }
+    }
+    CHECK(fx_udiv(0xFFFFFFFFu, 1) == 0xFFFFFFFFu && fx_udiv(5, 0xFFFFFFFFu) == 0 && fx_udiv(0x80000000u, 0x80000000u) == 1,
+          "edges");
+}
+
 static void fixed_point_helpers_saturate(void)
 {
     fx_gain_t huge = fx_gain(1.0e30f), one = fx_gain(1.0f), tiny = fx_gain(1.0e-30f);
@@ -172,4 +189,5 @@ void suite_pid(void)
     RUN(extreme_inputs_saturate_instead_of_wrapping);
     RUN(fixed_point_helpers_saturate);
     RUN(products_are_exact_for_every_exponent);
+    RUN(divisions_are_exact);
 }
