@@ -935,7 +935,8 @@ void comm_task(void)
         uint8_t b;
         while (budget && uart_getc(&b)) {
             budget--;
-            rx_byte(0, &links[0].rx, b);
+            if (!slip_take_plain(&links[0].rx, b)) /* a frame's body without a call a byte */
+                rx_byte(0, &links[0].rx, b);
         }
     }
     if (polled_links)
