@@ -90,10 +90,9 @@ static struct {
     int32_t vmin;           /* profile.min_speed_mps, um/s */
 } k;
 
-static void refresh_params(void)
+/* The conversion when settings changed: float arithmetic, a call that saves every register. */
+static __attribute__((noinline)) void params_changed(void)
 {
-    if (k.gen == settings_generation)
-        return;
     k.gen = settings_generation;
     pid_gains_convert(&k.speed, &settings.speed_pid, UM_PER_M, 1.0f);
     pid_gains_convert(&k.wheel, &settings.wheel_pid, UM_PER_M, 1.0f);
@@ -103,6 +102,13 @@ static void refresh_params(void)
     k.decel = fx_gain(p->decel_mps2);
     k.brake = fx_gain(2.0f * p->decel_mps2 * UM_PER_M / (float)(1ul << (2 * BRAKE_SHIFT)));
     k.vmin = (int32_t)(p->min_speed_mps * UM_PER_M + 0.5f);
+}
+
+/* The test of every tick, inline: the conversion apart. */
+static inline void refresh_params(void)
+{
+    if (k.gen != settings_generation)
+        params_changed();
 }
 
 static uint8_t mode(void)

@@ -35,10 +35,9 @@ static struct {
 } geo;
 static uint8_t geo_changed;
 
-static void refresh_geometry(void)
+/* The conversion when settings changed: float arithmetic, a call that saves every register. */
+static __attribute__((noinline)) void geometry_changed(void)
 {
-    if (geo.gen == settings_generation && geo.timeout_ms == settings.encoder.speed_timeout_ms)
-        return;
     uint16_t ppr = settings.encoder.pulses_per_rev ? settings.encoder.pulses_per_rev : 1u;
     float pulse_um = 3.14159265e6f * settings.geometry.wheel_diameter_m / (float)ppr;
     geo.pulse_q16 = pulse_um < 65535.0f ? (uint32_t)(pulse_um * 65536.0f + 0.5f) : 0xFFFFFFFFul;
@@ -56,6 +55,13 @@ static void refresh_geometry(void)
     geo.timeout = (uint32_t)geo.timeout_ms * (HAL_CAPTURE_HZ / 1000u);
     geo.gen = settings_generation;
     geo_changed = 1;
+}
+
+/* The test of every tick, inline: the conversion apart. */
+static inline void refresh_geometry(void)
+{
+    if (geo.gen != settings_generation || geo.timeout_ms != settings.encoder.speed_timeout_ms)
+        geometry_changed();
 }
 
 void speed_init(void)
@@ -103,10 +109,8 @@ int32_t speed_from_periods(uint32_t p0, uint32_t p1, uint32_t timeout_ticks)
     return tick_to_umps(tick_speed(p0, p1, timeout_ticks));
 }
 
-static void set_speed(wheel_t *wh, uint32_t v_tick, bool negative)
+static __attribute__((noinline)) void speed_changed(wheel_t *wh, uint32_t v_tick, bool negative)
 {
-    if (v_tick == wh->v_tick && (wh->v < 0) == negative)
-        return;
     int32_t v = tick_to_umps(v_tick);
     wh->v_tick = v_tick;
     wh->v = negative ? -v : v;
@@ -117,6 +121,13 @@ static void set_speed(wheel_t *wh, uint32_t v_tick, bool negative)
     if (mm > 32767u)
         mm = 32767u;
     wh->mmps = negative ? -(int16_t)mm : (int16_t)mm;
+}
+
+/* Most ticks change nothing (a wheel at rest stays at 0): that test inline, the update apart. */
+static inline void set_speed(wheel_t *wh, uint32_t v_tick, bool negative)
+{
+    if (v_tick != wh->v_tick || (wh->v < 0) != negative)
+        speed_changed(wh, v_tick, negative);
 }
 
 /* dist = count * pulse, kept exactly in Q16: one pulse forwards or back (the usual case between two ticks)
