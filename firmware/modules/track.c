@@ -123,7 +123,7 @@ static __attribute__((noinline)) void params_changed(void)
 }
 
 /* The test of every tick, inline: the conversion apart. */
-static inline void refresh_params(void)
+static inline __attribute__((always_inline)) void refresh_params(void)
 {
     if (k.gen != settings_generation)
         params_changed();
