@@ -364,7 +364,11 @@ static bool frame_out(uint8_t to, uint8_t must, uint8_t type, uint8_t seq, const
     out_payload = p;
     out_len = len;
     uint16_t framed_size = (uint16_t)(sizeof head + len + PB_FRAME_CRC_SIZE);
-    uint8_t ok = with_room(to, framed_size, (uint16_t)(2u * framed_size + 2u), frame_exact);
+    uint16_t worst = (uint16_t)(2u * framed_size + 2u);
+    /* A serial robot with one host asks its UART alone, as comm_send_streamed() does. */
+    uint8_t ok = to == 1u && links[0].drv == &comm_uart_link && uart_tx_free() >= worst
+                     ? 1u
+                     : with_room(to, framed_size, worst, frame_exact);
     if (!ok || (ok & must) != must)
         return false;
     robot_state.errors.tx_dropped += count_bits(to & (uint8_t)~ok);
