@@ -685,7 +685,7 @@ static uint16_t fragment_room(void)
     return w_frag_left;
 }
 
-static void advance(uint16_t k)
+static inline __attribute__((always_inline)) void advance(uint16_t k)
 {
     w_frag_left = (uint16_t)(w_frag_left - k);
     w_pdu_left = (uint16_t)(w_pdu_left - k);
