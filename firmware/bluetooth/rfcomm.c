@@ -327,15 +327,24 @@ uint16_t rfcomm_tx_room(uint8_t link)
     return (uint8_t)(r->tail - r->head - 1u);
 }
 
+/* Up to the ring's end and from its start, pointer to pointer (as h4_tx_bytes()): the staging of every byte comm
+ * sends. */
 void rfcomm_write(uint8_t link, const uint8_t *p, uint16_t n)
 {
     rfcomm_link_t *r = &rs[link];
     uint8_t h = r->head;
-    uint8_t *buf = r->buf;
-    while (n--) {
-        buf[h++] = *p++;
+    r->head = (uint8_t)(h + n);
+    while (n) {
+        uint16_t run = (uint16_t)(RFCOMM_TX_SIZE - h);
+        if (run > n)
+            run = n;
+        n = (uint16_t)(n - run);
+        uint8_t *d = r->buf + h;
+        h = (uint8_t)(h + run);
+        do
+            *d++ = *p++;
+        while (--run);
     }
-    r->head = h;
 }
 
 /* Writes the next slice of the frame being written (and its end). */
