@@ -587,7 +587,8 @@ static bool read_wire(void)
     return false;
 }
 
-void hci_task(void)
+/* A function of its own, not inlined into the main loop with the other tasks: cheaper in the worst ticks (measured). */
+__attribute__((noinline)) void hci_task(void)
 {
     if (state == ST_QUIET) {
         /* After a failure the controller may still be sending: wait for two quiet ticks, then reset it. */
