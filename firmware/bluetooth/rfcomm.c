@@ -380,8 +380,7 @@ static bool send_data(uint8_t link, uint8_t n, uint8_t give)
         r->tx_credits--;
     r->out_left = n;
     r->out_ctrl = ctrl;
-    write_slice(link);
-    return true;
+    return true; /* its slices from the next tick on: a frame's start is a tick's work of its own */
 }
 
 static void link_task(uint8_t link)
