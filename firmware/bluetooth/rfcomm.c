@@ -380,7 +380,8 @@ static bool send_data(uint8_t link, uint8_t n, uint8_t give)
         r->tx_credits--;
     r->out_left = n;
     r->out_ctrl = ctrl;
-    return true; /* its slices from the next tick on: a frame's start is a tick's work of its own */
+    write_slice(link);
+    return true;
 }
 
 static void link_task(uint8_t link)
@@ -417,8 +418,9 @@ static void link_task(uint8_t link)
 
 void rfcomm_task(void)
 {
+    uint8_t first = next_link; /* (not next_link in the loop: a link that ends a frame must not come round again) */
     for (uint8_t k = 0; k < BT_LINKS; k++) {
-        uint8_t link = (uint8_t)((next_link + k) % BT_LINKS);
+        uint8_t link = (uint8_t)((first + k) % BT_LINKS);
         if (!rs[link].dlc)
             continue;
         bool writing = rs[link].out_left != 0;

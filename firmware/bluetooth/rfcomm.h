@@ -6,8 +6,8 @@
  * as on any stream).
  *
  * Bytes to send are staged per link (RFCOMM_TX_SIZE) and go out as UIH frames of up to N1 bytes: at once when a
- * frame is full, else when the UART is about to run dry, so frames grow while the wire is busy; a frame's headers are
- * written in one tick, its information RFCOMM_SLICE bytes per tick from the next. Credits are given back as received frames are handled (comm handles each at once),
+ * frame is full, else when the UART is about to run dry, so frames grow while the wire is busy; a frame is written
+ * RFCOMM_SLICE bytes per tick. Credits are given back as received frames are handled (comm handles each at once),
  * with data or on a frame of their own.
  */
 #ifndef RFCOMM_H
