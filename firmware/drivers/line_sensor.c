@@ -11,10 +11,10 @@
 /* Spot lit by each detector in the two lit phases: detector d sits between emitters d and d+1, spot 2d is
  * lit by emitter d and spot 2d+1 by emitter d+1. Phase A (emitters 0, 2, 4) lights spots 0, 3, 4, 7 of
  * detectors 0..3, phase B (emitters 1, 3) spots 1, 2, 5, 6 (see line_sensor_task()). */
-_Static_assert(LINE_PHASE_US <= HAL_SCHED_MAX_DELAY_US, "a phase is one compare of the scheduler's timer");
-
 #define EMITTERS_A 0x15u
 #define EMITTERS_B 0x0Au
+
+_Static_assert(LINE_PHASE_US <= HAL_SCHED_MAX_DELAY_US, "a phase is one compare of the scheduler's timer");
 
 /* Spot centres in permille of the half-width, left to right. */
 static const HAL_FLASH int16_t spot_x[LINE_SPOTS] = {-1000, -714, -429, -143, 143, 429, 714, 1000};

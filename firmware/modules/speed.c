@@ -223,6 +223,7 @@ static inline __attribute__((always_inline)) int32_t position(const wheel_t *wh,
     return wh->v < 0 ? wh->dist - (int32_t)ext : wh->dist + (int32_t)ext;
 }
 
+/* Not inlined into its callers: position()'s two copies here are enough flash. */
 __attribute__((noinline)) void speed_positions_um(int32_t *left, int32_t *right)
 {
     uint32_t now = hal_capture_now();
