@@ -787,7 +787,8 @@ static void dispatch(uint8_t link, const uint8_t *frame, uint16_t n)
         return;
     }
     if (!info->watcher_ok && !drives) {
-        owe(link, PB_DRIVER_CHANGE_NONE); /* it learns who drives */
+        owe(link, PB_DRIVER_CHANGE_NONE); /* it learns who drives, before the refusal */
+        pay_debts();
         reject(PB_ERROR_CODE_NOT_DRIVER, f.type, f.seq, 0);
         return;
     }

@@ -15,7 +15,7 @@ const PB_FLASH pb_packet_info_t pb_packet_info[PB_PACKET_INFO_COUNT] = {
     {PB_PKT_DRIVER, 22, 22, PB_DIR_R2H, 0, 0, 0},
     {PB_PKT_HELLO_REQUEST, 6, 6, PB_DIR_H2R, 0, 0, 1},
     {PB_PKT_HEARTBEAT, 0, 0, PB_DIR_H2R, 0, 0, 1},
-    {PB_PKT_SET_ROLE, 17, 17, PB_DIR_H2R, 1, 0, 1},
+    {PB_PKT_SET_ROLE, 17, 17, PB_DIR_H2R, 1, 1, 1},
     {PB_PKT_GOODBYE, 1, 1, PB_DIR_H2R, 1, 0, 1},
     {PB_PKT_SET_SYNC, 3, 3, PB_DIR_H2R, 1, 0, 0},
     {PB_PKT_UPDATE_SETTINGS, 4, 67, PB_DIR_H2R, 1, 0, 0},

@@ -5,7 +5,7 @@ package org.pocketbot.protocol
 public object ProtocolInfo {
     public const val VERSION: Int = 3
     /** Hash of every packet, settings and state layout; compared with the robot's `hello`. */
-    public const val LAYOUT_HASH: Long = 0x074ECC37L
+    public const val LAYOUT_HASH: Long = 0x746D77FAL
     /** Firmware version this SDK was generated with. */
     public const val FIRMWARE_VERSION: String = "0.1.0"
     public const val MAX_PAYLOAD: Int = 120
@@ -210,7 +210,7 @@ public enum class ErrorCode(public val code: Int) {
     FRAMING(10),
     BUSY(11),
     BAD_SEQUENCE(12),
-    /** The command changes the robot, and another host drives it: this link only watches (a `driver` packet follows that names the driver). */
+    /** The command changes the robot, and another host drives it: this link only watches (the `driver` packet just before it names the driver). */
     NOT_DRIVER(13),
     /** Not the robot but what connects to it (the emulator's endpoint, a gateway): every host link of the robot is in use, so this host got none; detail: how many the robot has. */
     NO_FREE_LINK(14),
@@ -2729,7 +2729,7 @@ public val PACKET_SPECS: Map<Int, PacketSpec> = listOf(
     PacketSpec(11, "driver", 22, 22, true, false, false, false),
     PacketSpec(16, "hello_request", 6, 6, false, false, false, true),
     PacketSpec(17, "heartbeat", 0, 0, false, false, false, true),
-    PacketSpec(23, "set_role", 17, 17, false, true, false, true),
+    PacketSpec(23, "set_role", 17, 17, false, true, true, true),
     PacketSpec(24, "goodbye", 1, 1, false, true, false, true),
     PacketSpec(18, "set_sync", 3, 3, false, true, false, false),
     PacketSpec(19, "update_settings", 4, 67, false, true, false, false),
