@@ -4,8 +4,8 @@
  * (buffer sizes, address, local name `PocketBot-<id>`, class of device, Secure Simple Pairing, page and inquiry
  * scan), accepts incoming connections up to BT_LINKS, pairs "just works" with the link keys kept in EEPROM, sends
  * commands within the controller's command credits and ACL data within its buffer count
- * (Number_Of_Completed_Packets), and supervises the wire: an H4 error, a packet cut off, a command unanswered for
- * HCI_COMMAND_TIMEOUT_MS or a hardware error event drop every link and reset the controller
+ * (Number_Of_Completed_Packets), and supervises the wire: an H4 error, a packet cut off, a command unanswered (or no
+ * command credit) for HCI_COMMAND_TIMEOUT_MS or a hardware error event drop every link and reset the controller
  * (robot_state.errors.bt_*). A keep-alive command every HCI_KEEPALIVE_MS finds a controller that went quiet.
  *
  * Links are numbered 0..BT_LINKS-1; the layer above (L2CAP) implements the hooks at the end of this header.

@@ -166,8 +166,8 @@ uint16_t l2cap_peer_mtu(uint8_t link, uint8_t service)
 static void begin_cid(uint8_t link, uint16_t cid, uint16_t len)
 {
     hci_acl_begin(link, (uint16_t)(HEADER + len));
-    hci_acl_put_u16(len);
-    hci_acl_put_u16(cid);
+    uint8_t h[HEADER] = {(uint8_t)len, (uint8_t)(len >> 8), (uint8_t)cid, (uint8_t)(cid >> 8)};
+    hci_acl_put(h, HEADER); /* whole: a byte at a time was a call each through the fragmenter */
 }
 
 void l2cap_begin(uint8_t link, uint8_t service, uint16_t len)

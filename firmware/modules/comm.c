@@ -364,7 +364,11 @@ static bool frame_out(uint8_t to, uint8_t must, uint8_t type, uint8_t seq, const
     out_payload = p;
     out_len = len;
     uint16_t framed_size = (uint16_t)(sizeof head + len + PB_FRAME_CRC_SIZE);
-    uint8_t ok = with_room(to, framed_size, (uint16_t)(2u * framed_size + 2u), frame_exact);
+    uint16_t worst = (uint16_t)(2u * framed_size + 2u);
+    /* A serial robot with one host asks its UART alone, as comm_send_streamed() does. */
+    uint8_t ok = to == 1u && links[0].drv == &comm_uart_link && uart_tx_free() >= worst
+                     ? 1u
+                     : with_room(to, framed_size, worst, frame_exact);
     if (!ok || (ok & must) != must)
         return false;
     robot_state.errors.tx_dropped += count_bits(to & (uint8_t)~ok);
@@ -783,7 +787,8 @@ static void dispatch(uint8_t link, const uint8_t *frame, uint16_t n)
         return;
     }
     if (!info->watcher_ok && !drives) {
-        owe(link, PB_DRIVER_CHANGE_NONE); /* it learns who drives */
+        owe(link, PB_DRIVER_CHANGE_NONE); /* it learns who drives, before the refusal */
+        pay_debts();
         reject(PB_ERROR_CODE_NOT_DRIVER, f.type, f.seq, 0);
         return;
     }
@@ -846,8 +851,15 @@ void comm_link_rx(uint8_t link, const uint8_t *p, uint16_t n)
         return;
     }
     slip_decoder_t *rx = &links[link].rx;
-    while (n-- && links[link].drv != NULL)
-        rx_byte(link, rx, *p++);
+    while (n && links[link].drv != NULL) {
+        uint16_t k = slip_decode_plain(rx, p, n); /* the frame's body in bulk, its ENDs and escapes one by one */
+        p += k;
+        n = (uint16_t)(n - k);
+        if (n) {
+            rx_byte(link, rx, *p++);
+            n--;
+        }
+    }
 }
 
 /* The links whose received bytes comm_task() takes: each with rx_take, a batch at a time. */
@@ -928,7 +940,8 @@ void comm_task(void)
         uint8_t b;
         while (budget && uart_getc(&b)) {
             budget--;
-            rx_byte(0, &links[0].rx, b);
+            if (!slip_take_plain(&links[0].rx, b)) /* a frame's body without a call a byte */
+                rx_byte(0, &links[0].rx, b);
         }
     }
     if (polled_links)

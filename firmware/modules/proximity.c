@@ -34,7 +34,7 @@ static volatile uint8_t burst_msg;    /* next message of the running beacon */
 static volatile uint8_t burst_msgs;   /* messages in it */
 static uint8_t level;                 /* power level of the next beacon */
 static hal_ir_msg_t payload_msg;      /* pending payload, len > 0 while pending */
-static volatile uint8_t payload_pending, payload_in_burst;
+static volatile uint8_t payload_pending, payload_in_burst; /* queued; part of the running beacon */
 static proximity_payload_cb_t payload_cb;
 
 /* Last payload forwarded, to drop the copies a beacon carries from its four LEDs; `pending` while its
@@ -56,6 +56,14 @@ uint8_t proximity_distance_class(uint8_t power)
     return PB_DISTANCE_CLASS_FAR;
 }
 
+/* The time from one message of a beacon to the next: the message on the IR link, then a pause. */
+static uint32_t message_slot_us(uint8_t len)
+{
+    return hal_ir_message_us(len) + PROXIMITY_MSG_GAP_US;
+}
+
+/* A beacon: the pending payload from each LED first (a conversation waits at most a beacon period for it), then
+ * one message per LED at this beacon's power level. */
 static void send_next(void)
 {
     uint8_t k = burst_msg;
@@ -63,28 +71,29 @@ static void send_next(void)
         return;
     hal_ir_msg_t m;
     uint8_t full = settings.proximity.ir_power > 100u ? 100u : settings.proximity.ir_power;
-    if (k < LEDS) {
+    bool payload = payload_in_burst && k < LEDS;
+    if (payload) {
+        memcpy(&m, &payload_msg, sizeof m);
         m.sender_id = settings.identity.robot_id;
         m.led = k;
+    } else {
+        m.sender_id = settings.identity.robot_id;
+        m.led = (uint8_t)(k % LEDS);
         m.power = (uint8_t)(full >> level); /* 100, 50, 25 % of the set power */
         if (m.power == 0)
             m.power = 1;
         m.len = 0;
-    } else {
-        memcpy(&m, &payload_msg, sizeof m);
-        m.sender_id = settings.identity.robot_id;
-        m.led = (uint8_t)(k - LEDS);
     }
     if (!ir_transmit(&m)) { /* transmitter still busy: try again shortly */
-        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_SPACING_US / 4u, send_next);
+        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_GAP_US, send_next);
         return;
     }
     robot_state.indicators.ir_power = m.power;
     burst_msg = (uint8_t)(k + 1u);
+    if (payload && burst_msg == LEDS)
+        payload_pending = 0; /* sent from every LED: the next payload may come */
     if (burst_msg < burst_msgs)
-        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_SPACING_US, send_next);
-    else if (payload_in_burst)
-        payload_pending = payload_in_burst = 0;
+        scheduler_after(SCHED_CH_PROX_TX, message_slot_us(m.len), send_next);
 }
 
 static void beacon(void)
@@ -146,8 +155,11 @@ uint8_t proximity_send_payload(uint8_t power, const uint8_t *data, uint8_t len)
 
 static void forward_payload(uint8_t side, const hal_ir_msg_t *m, uint32_t now)
 {
+    /* The copies of a payload from the four LEDs of one beacon come within its messages' slots. */
+    uint32_t copies_ms = LEDS * (message_slot_us(HAL_IR_PAYLOAD_MAX) / 1000u + 1u);
     if (last_fwd.sender == m->sender_id && last_fwd.len == m->len && memcmp(last_fwd.data, m->data, m->len) == 0 &&
-        now - last_fwd.ms < settings.proximity.beacon_period_ms)
+        now - last_fwd.ms < (copies_ms > settings.proximity.beacon_period_ms ? copies_ms
+                                                                           : settings.proximity.beacon_period_ms))
         return;
     last_fwd.sender = m->sender_id;
     last_fwd.len = m->len;

@@ -27,8 +27,9 @@
  *  it is waited for; heard far, it is approached at half speed (the token holder's boost would catch it up). */
 #define VANISH_MS 1500u
 /** An offer of the token not accepted within this long is withdrawn (the holder still has the token) and made
- *  again, to whichever robot is close ahead then: about ten beacons, time for an answer to come back. */
-#define OFFER_TIMEOUT_MS 400u
+ *  again, to whichever robot is close ahead then: about four beacons that carry a message (each about 250 ms on
+ *  the IR link, the next one waits for it), time for an answer to come back. */
+#define OFFER_TIMEOUT_MS 1200u
 /** Searches for the line that meet the obstacle again before giving up. */
 #define MAX_RETRIES 3u
 /** Rounds of a search for a lost line (sweep, back up) before the robot gives up and stands still. */
@@ -112,14 +113,20 @@ static struct {
     int32_t speed, half, boosted; /* um/s */
 } k;
 
-static void refresh_params(void)
+/* The conversion when settings changed: float arithmetic, a call that saves every register. */
+static __attribute__((noinline)) void params_changed(void)
 {
-    if (k.gen == settings_generation)
-        return;
     k.gen = settings_generation;
     k.speed = (int32_t)(settings.track.speed_mps * UM_PER_M + 0.5f);
     k.half = k.speed / 2;
     k.boosted = k.speed + k.speed / 100 * settings.track.token_boost_percent;
+}
+
+/* The test of every tick, inline: the conversion apart. */
+static inline __attribute__((always_inline)) void refresh_params(void)
+{
+    if (k.gen != settings_generation)
+        params_changed();
 }
 
 /* The distance class of the robot heard in front, NONE if none. */

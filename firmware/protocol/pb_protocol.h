@@ -23,7 +23,7 @@
 #define PB_FW_MAJOR 0
 #define PB_FW_MINOR 1
 #define PB_FW_PATCH 0
-#define PB_LAYOUT_HASH 0x074ECC37UL
+#define PB_LAYOUT_HASH 0x746D77FAUL
 #define PB_FRAME_HEADER_SIZE 3
 #define PB_FRAME_CRC_SIZE 2
 #define PB_MAX_PAYLOAD 120
@@ -299,8 +299,8 @@ PB_STATIC_ASSERT(offsetof(pb_settings_motors_t, pwm_limit) == 0, "pb_settings_mo
 /** IR proximity: beacons to other robots and obstacle detection. */
 typedef struct PB_PACKED {
     uint8_t ir_power; /**< highest beacon power; 0 turns the beacon off [percent] */
-    uint16_t beacon_period_ms; /**< period of IR beacons [ms] */
-    uint16_t hold_ms; /**< how long a sighting stays in the state [ms] */
+    uint16_t beacon_period_ms; /**< period of IR beacons; a beacon (four messages, 96 ms on the IR link) that outlasts it delays the next [ms] */
+    uint16_t hold_ms; /**< how long a sighting stays in the state; longer than a cycle of the three beacon powers (three beacon periods) [ms] */
 } pb_settings_proximity_t;
 PB_STATIC_ASSERT(sizeof(pb_settings_proximity_t) == 5, "pb_settings_proximity_t size");
 PB_STATIC_ASSERT(offsetof(pb_settings_proximity_t, ir_power) == 0, "pb_settings_proximity_t.ir_power offset");
@@ -473,7 +473,7 @@ typedef struct PB_PACKED {
     uint16_t crc; /**< frames whose CRC failed */
     uint16_t framing; /**< runs of received bytes (between two ENDs) that made no frame: bad SLIP, shorter than 5 or longer than 125 bytes */
     uint16_t rejected; /**< frames with a sound CRC that were refused, for any reason */
-    uint16_t rx_overflow; /**< bytes lost to a full receive buffer */
+    uint16_t rx_overflow; /**< received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped) */
     uint16_t tx_dropped; /**< packets not sent because the transmit buffer was full */
     uint16_t bt_wire; /**< Bluetooth HCI build: H4 packets from the controller that broke the wire's framing (bad packet type, ACL longer than announced, a packet cut off) */
     uint16_t bt_timeouts; /**< Bluetooth HCI build: commands the controller did not answer within 1 s */

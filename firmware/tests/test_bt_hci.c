@@ -156,6 +156,25 @@ static void a_command_unanswered_resets_the_controller_and_drops_the_links(void)
     CHECK(hci_link_addr(0) != NULL, "link not accepted again");
 }
 
+/* A Command Complete that grants no command credit (Num_HCI_Command_Packets 0) and no credit after it: the stack
+ * cannot send, so after the command timeout it resets the controller as for a command unanswered. */
+static void no_command_credit_for_long_resets_the_controller(void)
+{
+    wire_bring_up(27, 64);
+    wire_clear();
+    const uint8_t none[3] = {0, 0x00, 0x00}; /* no credit, opcode 0 (no command) */
+    wire_event(0x0E, none, 3);
+    wire_run_ms(HCI_COMMAND_TIMEOUT_MS + 5);
+    CHECK(robot_state.errors.bt_timeouts == 1 && robot_state.errors.bt_resets == 1, "timeouts %u resets %u",
+          robot_state.errors.bt_timeouts, robot_state.errors.bt_resets);
+    CHECK(wire_find_command(0x0C03, 0), "no reset sent");
+    for (int i = 0; i < 30 && !hci_ready(); i++) {
+        wire_run_ms(1);
+        wire_answer_commands(27, 64);
+    }
+    CHECK(hci_ready(), "not back");
+}
+
 static void a_garbage_burst_is_counted_and_survived(void)
 {
     wire_bring_up(27, 64);
@@ -275,6 +294,7 @@ void suite_bt_hci(void)
     RUN(pairs_just_works_and_remembers_the_key_in_eeprom);
     RUN(the_oldest_key_gives_way);
     RUN(a_command_unanswered_resets_the_controller_and_drops_the_links);
+    RUN(no_command_credit_for_long_resets_the_controller);
     RUN(a_garbage_burst_is_counted_and_survived);
     RUN(a_lost_byte_stalls_a_packet_and_resets);
     RUN(a_full_receive_ring_is_a_wire_error);

@@ -135,6 +135,49 @@ static void bytes_staged_while_the_uart_is_busy_grow_into_one_frame(void)
           n > 1 ? sizes[1] : 0, n > 2 ? sizes[2] : 0);
 }
 
+/* Data bytes of the n-th UIH data frame the robot sent on `handle` (DLCI 2), -1 when there is none. */
+static int data_frame(uint16_t handle, int n)
+{
+    uint16_t len;
+    for (int k = 0;; k++) {
+        const uint8_t *f = wire_find_rfcomm(handle, k, &len);
+        if (!f)
+            return -1;
+        if (f[0] == 0x09 && (f[1] & 0xEF) == 0xEF && (f[2] >> 1) > 0 && n-- == 0)
+            return f[2] >> 1;
+    }
+}
+
+/* Two hosts send at once and the stack echoes on both links (as bt_e2e.py's peers): each gets every byte back, the
+ * links taking turns frame by frame. */
+static void two_links_are_served_in_turn(void)
+{
+    static const uint8_t computer[6] = {0x02, 0x00, 0x00, 0x00, 0x00, 0xB0};
+    wire_bring_up(27, 64);
+    wire_connect(phone, 1);
+    uint16_t c1 = wire_open_rfcomm(1, 7, 121);
+    wire_connect(computer, 2);
+    uint16_t c2 = wire_open_rfcomm(2, 7, 121);
+    wire_clear();
+    wire_uart_bytes_per_ms = 12; /* the wire's pace, as --live sends */
+    wire_echo = true;
+    uint8_t d[20];
+    for (int round = 0; round < 6; round++) {
+        memset(d, round + 1, sizeof d);
+        wire_rfcomm(1, c1, 2, 0xEF, d, sizeof d, 0);
+        wire_rfcomm(2, c2, 2, 0xEF, d, sizeof d, 0);
+        wire_run_ms(2);
+    }
+    wire_run_ms(100);
+    wire_echo = false;
+    int echoed[2] = {0, 0};
+    for (int h = 0; h < 2; h++)
+        for (int k = 0, n; (n = data_frame((uint16_t)(h + 1), k)) > 0; k++)
+            echoed[h] += n;
+    CHECK(echoed[0] == 120 && echoed[1] == 120, "echoed %d bytes to the phone, %d to the computer", echoed[0],
+          echoed[1]);
+}
+
 static void a_bad_fcs_is_dropped(void)
 {
     up(7);
@@ -196,6 +239,7 @@ void suite_bt_rfcomm(void)
     RUN(data_in_is_handed_up_and_credits_come_back);
     RUN(staged_bytes_go_out_within_credits);
     RUN(bytes_staged_while_the_uart_is_busy_grow_into_one_frame);
+    RUN(two_links_are_served_in_turn);
     RUN(a_bad_fcs_is_dropped);
     RUN(port_line_test_and_unknown_messages_are_answered);
     RUN(disconnecting_closes_cleanly_and_a_lost_link_not);

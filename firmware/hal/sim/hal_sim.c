@@ -80,13 +80,12 @@ uint32_t hal_micros(void)
     return (uint32_t)(uint64_t)(now_ticks / TICKS_PER_US);
 }
 
-void hal_sched_arm(uint8_t ch, uint32_t at_us)
+void hal_sched_arm(uint8_t ch, uint32_t delay_us)
 {
     if (ch >= HAL_SCHED_CHANNELS)
         return;
-    int32_t ahead = (int32_t)(at_us - hal_micros());
-    int64_t base = (now_ticks / TICKS_PER_US) * TICKS_PER_US;
-    deadline[ch] = ahead > 0 ? base + (int64_t)ahead * TICKS_PER_US : now_ticks;
+    int64_t base = (now_ticks / TICKS_PER_US) * TICKS_PER_US; /* whole microseconds, as hal_micros() counts them */
+    deadline[ch] = delay_us > 0 ? base + (int64_t)delay_us * TICKS_PER_US : now_ticks;
     armed[ch] = 1;
 }
 

@@ -22,6 +22,10 @@ import org.pocketbot.emulator.cli.EmulatorCommand
 import org.pocketbot.sdk.CommandRefusedException
 import org.pocketbot.sdk.CommandTimeoutException
 import org.pocketbot.sdk.ConnectFailedException
+import org.pocketbot.sdk.HostLabel
+import org.pocketbot.sdk.NotDriverException
+import org.pocketbot.sdk.QueueOnLeave
+import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.ProtocolMismatchException
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotClosedException
@@ -41,10 +45,12 @@ object Exit {
     const val LINK_LOST = 5
     const val VERSION_MISMATCH = 6
     const val TIMEOUT = 7
+    const val DRIVEN_ELSEWHERE = 8
 
     /** The exit code for [e], the way a script can act on it. */
     fun of(e: Throwable): Int = when (e) {
         is NoSuchRobotException -> NO_SUCH_ROBOT
+        is NotDriverException, is DrivenElsewhereException -> DRIVEN_ELSEWHERE
         is CommandRefusedException -> REFUSED
         is ProtocolMismatchException -> VERSION_MISMATCH
         is CommandTimeoutException, is TimeoutCancellationException -> TIMEOUT
@@ -58,8 +64,11 @@ object Exit {
 
 /** What every command shares: where to look for robots, and how to print. */
 class Globals(val format: Format, val sources: Sources) {
-    val options = RobotOptions()
+    val options = RobotOptions(hostLabel = HostLabel.of("cli"))
 }
+
+/** Another host drives the robot and the command would change it: exit code 8. */
+class DrivenElsewhereException(message: String) : Exception(message)
 
 /** `--json` / `--csv`, accepted before the command (for every command) and after it: the format, or null for the default. */
 fun CoreCliktCommand.formatOptions() = option(help = "output format: --json (one object per line) or --csv").switch("--json" to Format.JSON, "--csv" to Format.CSV)
@@ -71,7 +80,8 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
         serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found.
 
         Exit codes: 0 ok, 1 other failure, 2 usage (also an unknown setting or field), 3 no such robot,
-        4 refused by the robot, 5 link lost, 6 firmware version mismatch, 7 timeout.
+        4 refused by the robot, 5 link lost, 6 firmware version mismatch, 7 timeout, 8 driven by another host
+        (commands that change a robot need --take-over then; the others only watch it).
 
         Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
     """.trimIndent()
@@ -114,10 +124,15 @@ fun main(args: Array<String>) {
 }
 
 /**
- * Runs [block] with the robots a command names connected, and disconnects them afterwards. Failures become a clear
- * line on stderr and the documented exit code.
+ * Runs [block] with the robots a command names connected as [role], and says goodbye to them afterwards (the robot
+ * does with what this command queued as [onLeave] says). With [mustDrive], a robot that another host drives fails
+ * the command before anything is sent to any robot. Failures become a clear line on stderr and the documented exit
+ * code.
  */
-fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Boolean, block: suspend CoroutineScope.(List<Robot>, Output) -> Unit) {
+fun robotCommand(
+    globals: Globals, format: Format?, names: List<String>, all: Boolean, role: Role, mustDrive: Boolean, onLeave: QueueOnLeave,
+    block: suspend CoroutineScope.(List<Robot>, Output) -> Unit,
+) {
     if (!all && names.isEmpty()) throw UsageError("name a robot, or use --all")
     val out = Output(format ?: globals.format)
     val code = runBlocking {
@@ -130,7 +145,10 @@ fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Bo
             val found = if (!all && names.all { deviceAt(it) != null }) emptyList() else globals.sources.scan(enough = { f ->
                 !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
             })
-            robots = connectRobots(found, names, all, globals.options, progress)
+            robots = connectRobots(found, names, all, globals.options.copy(role = role), progress)
+            if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
+                throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
+            }
             coroutineScope { block(robots, out) } // a failure of any robot's part surfaces as itself
             out.flush()
             Exit.OK
@@ -139,10 +157,10 @@ fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Bo
         } catch (e: Exception) {
             progress.clear()
             out.flush()
-            System.err.println("pocketbot: ${e.message ?: e}")
+            System.err.println("pocketbot: ${e.message ?: e}" + if (e is NotDriverException) " (use --take-over)" else "")
             Exit.of(e)
         } finally {
-            for (r in robots) r.disconnect()
+            for (r in robots) r.disconnect(onLeave)
         }
     }
     if (code != Exit.OK) throw com.github.ajalt.clikt.core.ProgramResult(code)

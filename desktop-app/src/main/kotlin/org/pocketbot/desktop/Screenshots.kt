@@ -12,14 +12,17 @@ import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.ui.View
 import org.pocketbot.sdk.Controller
 import org.pocketbot.sdk.Movement
+import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.Role
+import org.pocketbot.sdk.connect
 import java.awt.Rectangle
 import java.io.File
 import javax.imageio.ImageIO
 
 /**
  * `make screenshots`: drives the real panel (under Xvfb) through its main views with the embedded fleet running and
- * writes a PNG of the window for each to [dir], the overview, the world and the track behaviour's card on the track
- * world with the behaviour running (thesis A.3), then calls [done].
+ * writes a PNG of the window for each to [dir], the panel watching a robot another host took over, the overview, the
+ * world and the track behaviour's card on the track world with the behaviour running (thesis A.3), then calls [done].
  */
 @Composable
 fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<View>, dir: File, done: () -> Unit) {
@@ -57,6 +60,14 @@ fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<Vie
         tuned.movements.first { it.size == 3 && it.all { m -> m.result != null } }
         tuned.enqueue(Movement.Straight(0.3, 0.1))
         shoot(View.COMMANDS, "commands")
+        // Another host (as `pocketbot --take-over` does) takes the robot over: the panel watches it and says who drives.
+        tuned.movements.first { it.last().result != null }
+        val other = tuned.emulated!!.device().connect(this, RobotOptions(role = Role.TAKE_OVER, hostLabel = "cli@lab-pc"))
+        other.locomotion.enqueue(Movement.Rotate(180.0, 0.1))
+        tuned.driving.first { !it.byThisHost }
+        shoot(View.COMMANDS, "watching")
+        other.disconnect()
+        tuned.driving.first { it.byThisHost }
         // Track (thesis A.3): three robots on the track world running the behaviour: the overview with its track
         // column, the world with the token holder's orange light, and the token holder's Commands view.
         tuned.movements.first { it.last().result != null } // ended before its robot goes with the old world

@@ -16,6 +16,7 @@ import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeoutOrNull
 import org.pocketbot.emulator.transport.ListenAddress
+import org.pocketbot.sdk.HostLabel
 import org.pocketbot.sdk.ProtocolMismatchException
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.TrajectoryPoint
@@ -45,7 +46,7 @@ class PanelModel(
     private val sources: Map<String, Discoverer>,
     /** The embedded emulator, or null when the panel runs without one. */
     val emulator: EmulatorModel?,
-    private val options: RobotOptions = RobotOptions(),
+    private val options: RobotOptions = RobotOptions(hostLabel = HostLabel.of("panel")),
 ) : AutoCloseable {
     private val _found = MutableStateFlow<List<FoundDevice>>(emptyList())
     private val _robots = MutableStateFlow<List<RobotModel>>(emptyList())

@@ -15,11 +15,13 @@ import org.pocketbot.protocol.ColourMode
 import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.CommandTimeoutException
 import org.pocketbot.sdk.DebugMessage
+import org.pocketbot.sdk.Driving
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementHandle
 import org.pocketbot.sdk.MovementResult
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotException
 import org.pocketbot.sdk.SettingField
 import org.pocketbot.sdk.SettingRefusedException
@@ -68,7 +70,8 @@ class QueuedMovement(val handle: MovementHandle, val result: MovementResult? = n
 /**
  * One connected robot as the panel drives it: commands, settings edits with their status, the console, teleoperation
  * and tuning. Everything it does goes through the SDK's public API; failures become messages ([notify]), never
- * crashes.
+ * crashes. Another host may drive the robot ([driving]): the panel then watches it until the user takes it over
+ * ([takeOver]), and says so when the robot is taken from it, given back, or restarts.
  */
 class RobotModel(
     val robot: Robot,
@@ -110,11 +113,30 @@ class RobotModel(
     /** Robot time (ms) of the last full state: what greyed-out values date from. */
     val lastFullStateMs: StateFlow<Long> = _lastFullStateMs.asStateFlow()
 
+    /** Who drives the robot: this panel, another host (by its label), or none. */
+    val driving: StateFlow<Driving> get() = robot.driving
+
     private val jobs = listOf(
         scope.launch { robot.debugLog.messages.collect { m -> _console.update { (it + m).takeLast(MAX_CONSOLE) } } },
+        scope.launch { robot.events.collect(::tell) },
         scope.launch { robot.stateUpdates.collect { if (it.kind == StateUpdate.Kind.FULL) _lastFullStateMs.value = it.timeMs } },
         scope.launch { robot.reflector.mode.collect { _freshness.value = Freshness.of(it) } },
     )
+
+    /** Takes the robot from the host that drives it (which is told); the panel drives it from then on. */
+    fun takeOver() = act("take over") { robot.takeOver() }
+
+    private fun tell(event: RobotEvent) = when (event) {
+        is RobotEvent.DriverChanged -> when {
+            event.taken -> notify("$name was taken over by ${event.driving.driver ?: "another host"}: this panel only watches it now (Take over to drive it again)", true)
+            event.driving.byThisHost -> notify("this panel drives $name", false)
+            else -> {}
+        }
+        is RobotEvent.Restarted -> notify("$name restarted: its clock went back from ${seconds(event.lastSeenTimeMs)} to ${seconds(event.timeMs)}; " +
+            "what it had queued is gone", true)
+    }
+
+    private fun seconds(ms: Long) = "%.1f s".format(ms / 1000.0)
 
     /** Queues [movement]; it shows in [movements] at once and gets its result when it ends. */
     fun enqueue(movement: Movement) = act("enqueue $movement") {

@@ -37,6 +37,7 @@ import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.Driving
 
 /** Finding and connecting robots, and the connected ones with their link, always in view. */
 @Composable
@@ -105,8 +106,29 @@ private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () ->
             TextButton(onClick = onDisconnect, modifier = Modifier.height(32.dp).testTag("disconnect-${robot.name}")) { Text("Disconnect") }
         }
         Text("${describe(connection)} · ${robot.address}", style = MaterialTheme.typography.bodySmall)
+        Driver(robot)
         LinkCounters(robot)
     }
+}
+
+/** Who drives the robot, and while another host does, the button that takes it over. */
+@Composable
+private fun Driver(robot: RobotModel) {
+    val driving by robot.driving.collectAsState()
+    Row(verticalAlignment = Alignment.CenterVertically) {
+        Text(drivingText(driving), Modifier.weight(1f).testTag("driver-${robot.name}"), style = MaterialTheme.typography.bodySmall,
+            color = if (driving.byThisHost) MaterialTheme.colorScheme.onSurfaceVariant else MaterialTheme.colorScheme.primary)
+        if (!driving.byThisHost) {
+            TextButton(onClick = robot::takeOver, modifier = Modifier.height(32.dp).testTag("take-over-${robot.name}")) { Text("Take over") }
+        }
+    }
+}
+
+/** The panel's words for who drives a robot. */
+fun drivingText(d: Driving): String = when {
+    d.byThisHost -> "this panel drives it"
+    d.driver != null -> "watching: ${d.driver} drives it"
+    else -> "watching: no host drives it"
 }
 
 /** The part of a robot's card that keeps changing, in a scope of its own: the rest is not composed again with it. */

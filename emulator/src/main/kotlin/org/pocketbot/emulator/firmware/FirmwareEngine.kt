@@ -38,6 +38,8 @@ internal class FirmwareEngine(image: FirmwareImage) {
     val uartTxTake: ExportFunction
     val irRx: ExportFunction
     val runEvents: ExportFunction
+    /** Null in a firmware that serves one host link only (the UART). */
+    val linkTxTake: ExportFunction?
 
     init {
         val i32 = ValType.I32
@@ -67,6 +69,7 @@ internal class FirmwareEngine(image: FirmwareImage) {
         uartTxTake = instance.export("sim_uart_tx_take")
         irRx = instance.export("sim_ir_rx")
         runEvents = instance.export("sim_run_events")
+        linkTxTake = exportOrNull("sim_link_tx_take")
     }
 
     /** The state of a fresh instance (before any call): memory and mutable globals (low and high words). */

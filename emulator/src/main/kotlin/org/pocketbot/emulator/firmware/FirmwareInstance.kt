@@ -63,6 +63,9 @@ public class FirmwareInstance(private val image: FirmwareImage, internal val hos
     /** Address of the EEPROM (sim_eeprom), or -1 for a firmware without one (the stand-in). */
     public val eepromAddress: Int
 
+    /** How many host links the firmware serves at once (sim_links; 1, the UART, for a firmware without it). */
+    public val linkCount: Int
+
     init {
         fun address(name: String): Int = call { it.instance.export(name).apply()[0].toInt() }
         eventsAddress = address("sim_events")
@@ -71,6 +74,7 @@ public class FirmwareInstance(private val image: FirmwareImage, internal val hos
         settingsAddress = address("sim_settings")
         txBufferAddress = address("sim_uart_tx_buffer")
         eepromAddress = call { it.exportOrNull("sim_eeprom")?.apply()?.get(0)?.toInt() } ?: -1
+        linkCount = call { it.exportOrNull("sim_links")?.apply()?.get(0)?.toInt() } ?: 1
     }
 
     /** Runs [block] in an engine bound to this firmware. */
@@ -106,7 +110,8 @@ public class FirmwareInstance(private val image: FirmwareImage, internal val hos
 
     /**
      * Puts event [index] (0 until [EVENT_CAPACITY]) in the buffer for [runEvents]: at [ticks], a byte received
-     * ([EVENT_UART_RX], [arg] the byte) or an encoder edge ([EVENT_ENCODER_EDGE], [arg] the wheel).
+     * ([EVENT_UART_RX], [arg] the byte; [EVENT_LINK_RX] on another link), an encoder edge ([EVENT_ENCODER_EDGE], [arg]
+     * the wheel), or a host link opened or closed ([EVENT_LINK_OPEN], [EVENT_LINK_CLOSE], [arg] the link).
      */
     public fun putEvent(index: Int, ticks: Long, kind: Int, arg: Int) {
         val at = eventsAddress + index * EVENT_BYTES
@@ -123,6 +128,10 @@ public class FirmwareInstance(private val image: FirmwareImage, internal val hos
 
     /** Takes up to [max] bytes queued for the host; they are at [txBufferAddress]. */
     public fun uartTxTake(max: Int): Int = call { it.uartTxTake.apply(max.toLong())[0].toInt() }
+
+    /** As [uartTxTake], for host link [link] (0: the UART). */
+    public fun linkTxTake(link: Int, max: Int): Int =
+        if (link == 0) uartTxTake(max) else call { it.linkTxTake?.apply(link.toLong(), max.toLong())?.get(0)?.toInt() ?: 0 }
 
     public fun irRx(side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
         call { it.irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong()) }
@@ -143,6 +152,11 @@ public class FirmwareInstance(private val image: FirmwareImage, internal val hos
         public const val EVENT_CAPACITY: Int = 64
         public const val EVENT_UART_RX: Int = 0
         public const val EVENT_ENCODER_EDGE: Int = 1
+        /** A byte on a host link: the argument is `link shl 8 or byte`. */
+        public const val EVENT_LINK_RX: Int = 2
+        /** A host came on link `arg`, or left it. */
+        public const val EVENT_LINK_OPEN: Int = 3
+        public const val EVENT_LINK_CLOSE: Int = 4
         private const val EVENT_BYTES = 16
         private const val OUT_PWM_LEFT = 0
         private const val OUT_PWM_RIGHT = 2

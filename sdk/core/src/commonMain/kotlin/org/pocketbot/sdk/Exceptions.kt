@@ -42,6 +42,23 @@ public open class CommandRefusedException internal constructor(
         this(commandName(packetType), errorCodeOf(rawCode), detail)
 }
 
+/**
+ * A command that changes the robot, on a robot this host does not drive: another host drives it ([driver], its label,
+ * when known) or none does. Thrown at once, without sending, when this host knows it watches; also when the robot
+ * refuses the command because the drive changed meanwhile. Take the drive with [Robot.takeOver] (or ask for it with
+ * [Robot.setRole]); [Robot.driving] says who drives.
+ */
+public class NotDriverException internal constructor(
+    /** The robot's name. */
+    public val robot: String,
+    command: String,
+    /** The label of the host that drives the robot, or null when no host drives it (or this host does not know). */
+    public val driver: String?,
+) : CommandRefusedException(
+    command, ErrorCode.NOT_DRIVER, 0,
+    if (driver != null) "$robot is driven by $driver" else "$robot is not driven by this host",
+)
+
 /** The robot refused to write the setting [name] to [value]: outside its min..max, or not a whole field. */
 public class SettingRefusedException internal constructor(
     /** The setting's name, e.g. `line_pid.kp`. */

@@ -59,6 +59,8 @@ public sealed class SettingField<T> constructor(
         encode(value, bytes)
         try {
             link.command(UpdateSettings(info.offset, bytes))
+        } catch (e: NotDriverException) {
+            throw e // not the value: the robot takes no settings from a host that watches
         } catch (e: CommandRefusedException) {
             throw SettingRefusedException(name, value, e.code, e.detail)
         }

@@ -82,6 +82,8 @@ public abstract class SettingsBase internal constructor(internal val linkPort: L
             val data = wanted.copyOfRange(start, run.last().offset + run.last().size)
             try {
                 linkPort.command(UpdateSettings(start, data))
+            } catch (e: NotDriverException) {
+                throw e // not the values: the robot takes no settings from a host that watches
             } catch (e: CommandRefusedException) {
                 // The robot names the offending field by its offset; a range error names the start of the run.
                 val culprit = run.firstOrNull { it.offset == e.detail } ?: run.first()

@@ -5,7 +5,7 @@ package org.pocketbot.protocol
 public object ProtocolInfo {
     public const val VERSION: Int = 3
     /** Hash of every packet, settings and state layout; compared with the robot's `hello`. */
-    public const val LAYOUT_HASH: Long = 0x074ECC37L
+    public const val LAYOUT_HASH: Long = 0x746D77FAL
     /** Firmware version this SDK was generated with. */
     public const val FIRMWARE_VERSION: String = "0.1.0"
     public const val MAX_PAYLOAD: Int = 120
@@ -210,7 +210,7 @@ public enum class ErrorCode(public val code: Int) {
     FRAMING(10),
     BUSY(11),
     BAD_SEQUENCE(12),
-    /** The command changes the robot, and another host drives it: this link only watches (a `driver` packet follows that names the driver). */
+    /** The command changes the robot, and another host drives it: this link only watches (the `driver` packet just before it names the driver). */
     NOT_DRIVER(13),
     /** Not the robot but what connects to it (the emulator's endpoint, a gateway): every host link of the robot is in use, so this host got none; detail: how many the robot has. */
     NO_FREE_LINK(14),
@@ -858,9 +858,9 @@ public class SettingsMotors(
 public class SettingsProximity(
     /** highest beacon power; 0 turns the beacon off [percent] */
     public val irPower: Int,
-    /** period of IR beacons [ms] */
+    /** period of IR beacons; a beacon (four messages, 96 ms on the IR link) that outlasts it delays the next [ms] */
     public val beaconPeriodMs: Int,
-    /** how long a sighting stays in the state [ms] */
+    /** how long a sighting stays in the state; longer than a cycle of the three beacon powers (three beacon periods) [ms] */
     public val holdMs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -1444,7 +1444,7 @@ public class StateErrors(
     public val framing: Int,
     /** frames with a sound CRC that were refused, for any reason */
     public val rejected: Int,
-    /** bytes lost to a full receive buffer */
+    /** received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped) */
     public val rxOverflow: Int,
     /** packets not sent because the transmit buffer was full */
     public val txDropped: Int,
@@ -2729,7 +2729,7 @@ public val PACKET_SPECS: Map<Int, PacketSpec> = listOf(
     PacketSpec(11, "driver", 22, 22, true, false, false, false),
     PacketSpec(16, "hello_request", 6, 6, false, false, false, true),
     PacketSpec(17, "heartbeat", 0, 0, false, false, false, true),
-    PacketSpec(23, "set_role", 17, 17, false, true, false, true),
+    PacketSpec(23, "set_role", 17, 17, false, true, true, true),
     PacketSpec(24, "goodbye", 1, 1, false, true, false, true),
     PacketSpec(18, "set_sync", 3, 3, false, true, false, false),
     PacketSpec(19, "update_settings", 4, 67, false, true, false, false),
@@ -2906,8 +2906,8 @@ public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
     SettingsFieldInfo("geometry.wheel_base_m", 155, FieldType.F32, 1, 0.005, 0.5, "m", "distance between the wheels (gauge)"),
     SettingsFieldInfo("motors.pwm_limit", 159, FieldType.U16, 1, 0.0, 1000.0, "permille", "largest PWM duty the controllers may command"),
     SettingsFieldInfo("proximity.ir_power", 161, FieldType.U8, 1, 0.0, 100.0, "percent", "highest beacon power; 0 turns the beacon off"),
-    SettingsFieldInfo("proximity.beacon_period_ms", 162, FieldType.U16, 1, 10.0, 10000.0, "ms", "period of IR beacons"),
-    SettingsFieldInfo("proximity.hold_ms", 164, FieldType.U16, 1, 10.0, 10000.0, "ms", "how long a sighting stays in the state"),
+    SettingsFieldInfo("proximity.beacon_period_ms", 162, FieldType.U16, 1, 10.0, 10000.0, "ms", "period of IR beacons; a beacon (four messages, 96 ms on the IR link) that outlasts it delays the next"),
+    SettingsFieldInfo("proximity.hold_ms", 164, FieldType.U16, 1, 10.0, 10000.0, "ms", "how long a sighting stays in the state; longer than a cycle of the three beacon powers (three beacon periods)"),
     SettingsFieldInfo("track.speed_mps", 166, FieldType.F32, 1, 0.03, 0.3, "m/s", "cruise speed on the line"),
     SettingsFieldInfo("track.token_boost_percent", 170, FieldType.U8, 1, 0.0, 100.0, "percent", "the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead"),
     SettingsFieldInfo("track.token_origin_id", 171, FieldType.U8, 1, 0.0, 254.0, "", "the robot with this id creates the token at its first start; 0: none does"),
@@ -2916,4 +2916,4 @@ public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
 )
 
 /** The settings compiled into the firmware. */
-public val SETTINGS_DEFAULTS: Settings = Settings(SettingsIdentity(1, "PocketBot"), SettingsSync(1, 100), SettingsScheduler(1000), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x471c4000.toInt()), Float.fromBits(0x42480000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x40000000.toInt())), Pid(Float.fromBits(0x39d1b717.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x3b03126f.toInt()), Float.fromBits(0x447a0000.toInt())), SettingsProfile(Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3ca3d70a.toInt())), SettingsLineFollow(Float.fromBits(0x3e19999a.toInt()), Float.fromBits(0x3d8f5c29.toInt()), Float.fromBits(0x3e800000.toInt()), 300, 1), SettingsLineSensor(listOf(100, 100, 100, 100, 100, 100, 100, 100), listOf(2000, 2000, 2000, 2000, 2000, 2000, 2000, 2000), 250), SettingsEncoder(40, 80), SettingsGeometry(Float.fromBits(0x3c1374bc.toInt()), Float.fromBits(0x3cd4fdf4.toInt())), SettingsMotors(1000), SettingsProximity(100, 40, 250), SettingsTrack(Float.fromBits(0x3df5c28f.toInt()), 100, 1), SettingsLink(1000), SettingsDebug(1))
+public val SETTINGS_DEFAULTS: Settings = Settings(SettingsIdentity(1, "PocketBot"), SettingsSync(1, 100), SettingsScheduler(1000), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x471c4000.toInt()), Float.fromBits(0x42480000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x40000000.toInt())), Pid(Float.fromBits(0x39d1b717.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x3b03126f.toInt()), Float.fromBits(0x447a0000.toInt())), SettingsProfile(Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3ca3d70a.toInt())), SettingsLineFollow(Float.fromBits(0x3e19999a.toInt()), Float.fromBits(0x3d8f5c29.toInt()), Float.fromBits(0x3e800000.toInt()), 300, 1), SettingsLineSensor(listOf(100, 100, 100, 100, 100, 100, 100, 100), listOf(2000, 2000, 2000, 2000, 2000, 2000, 2000, 2000), 250), SettingsEncoder(40, 80), SettingsGeometry(Float.fromBits(0x3c1374bc.toInt()), Float.fromBits(0x3cd4fdf4.toInt())), SettingsMotors(1000), SettingsProximity(100, 100, 450), SettingsTrack(Float.fromBits(0x3df5c28f.toInt()), 100, 1), SettingsLink(1000), SettingsDebug(1))
