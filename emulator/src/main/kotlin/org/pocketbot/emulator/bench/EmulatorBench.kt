@@ -3,6 +3,7 @@ package org.pocketbot.emulator.bench
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.EmulatorConfig
 import org.pocketbot.sdk.Pose
+import org.pocketbot.emulator.world.Point
 import org.pocketbot.emulator.world.Tape
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
@@ -30,8 +31,10 @@ import kotlin.time.Duration.Companion.seconds
  * only in its code or memory layout (another compiler flag) and behaves the same.
  * The fleet shares a floor of round tracks (thesis A.3) laid side by side, three robots per track.
  * Args: fleet sizes (default 1 10 100 1000).
+ *
+ * Internal: a program of this repository (`make bench-emulator`), not part of the library's API.
  */
-public fun main(args: Array<String>) {
+internal fun main(args: Array<String>) {
     val sizes = args.mapNotNull { it.toIntOrNull() }.ifEmpty { listOf(1, 3, 10, 30, 100, 300, 1000) }
     // Warm-up: let the JIT compile the firmware and the emulator before anything is measured.
     run(10, measureS = 40, warmS = 1)
@@ -80,12 +83,12 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
     val world = World(
         name = "round-x$tracks", widthM = tile * cols, heightM = tile * rows, ambientAdc = round.ambientAdc,
         tapes = List(tracks) { k ->
-            track.copy(center = track.center.copy(x = track.center.x + tile * (k % cols), y = track.center.y + tile * (k / cols)))
+            val center = Point(track.center.x + tile * (k % cols), track.center.y + tile * (k / cols))
+            Tape.Arc(center, track.radiusM, track.startDeg, track.sweepDeg, track.widthM, track.colour)
         },
     )
-    val config = EmulatorConfig(seed = 42).let { c ->
-        System.getProperty("pocketbot.bench.threads")?.toIntOrNull()?.let { c.copy(threads = it) } ?: c
-    }
+    val config = System.getProperty("pocketbot.bench.threads")?.toIntOrNull()
+        ?.let { EmulatorConfig(seed = 42, threads = it) } ?: EmulatorConfig(seed = 42)
     Emulator(world, config).use { emu ->
         val emptyHeap = liveHeap()
         // A host that drives each robot (hello_request, set_role) and starts its line following; acknowledged commands

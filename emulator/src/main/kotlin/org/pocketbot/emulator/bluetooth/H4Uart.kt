@@ -38,7 +38,7 @@ internal class H4Uart(private val link: RobotLink, private val controller: InetS
                     s.connect(controller, CONNECT_TIMEOUT_MS)
                     socket = s
                     out.clear()
-                    link.attach(connection)
+                    check(link.settings.connected && link.tryAttach(connection)) { "the link is down" }
                     val writer = Thread({ writeLoop(s) }, "${Thread.currentThread().name}-tx").apply { isDaemon = true; start() }
                     try {
                         val input = s.getInputStream()
@@ -55,7 +55,7 @@ internal class H4Uart(private val link: RobotLink, private val controller: InetS
                     }
                 }
             } catch (_: IOException) {
-            } catch (_: IllegalStateException) { // the link model has the link down: the wire is cut
+            } catch (_: IllegalStateException) { // the link model has the link down, or still drains the last wire's bytes
             }
             socket = null
             if (!closed) Thread.sleep(RETRY_MS)

@@ -5,6 +5,8 @@ import com.dylibso.chicory.runtime.Machine
 import com.dylibso.chicory.wasm.Parser
 import com.dylibso.chicory.wasm.WasmModule
 import com.dylibso.chicory.wasm.types.OpCode
+import com.sun.management.HotSpotDiagnosticMXBean
+import java.lang.management.ManagementFactory
 import java.nio.file.Files
 import java.nio.file.Path
 import java.util.function.Function
@@ -55,6 +57,10 @@ public class FirmwareImage internal constructor(
          * The firmware compiled to JVM bytecode at build time (chicory-compiler-maven-plugin, from
          * firmware/build/wasm/pocketbot.wasm). Throws [IllegalStateException] when the emulator was built
          * without the firmware (run `make -C firmware wasm`, then rebuild the emulator).
+         *
+         * Logs a warning (once, through `System.Logger` "org.pocketbot.emulator") when the JVM was started without
+         * `-XX:-DontCompileHugeMethods`: HotSpot then never compiles the firmware's largest functions, and the
+         * emulator runs at about half its speed (emulator/README.md, "Performance").
          */
         public fun compiled(): FirmwareImage = compiled(COMPILED_CLASS, "pocketbot.wasm")
 
@@ -67,6 +73,7 @@ public class FirmwareImage internal constructor(
         public fun compiledHci(): FirmwareImage = compiled(COMPILED_HCI_CLASS, "pocketbot-hci.wasm")
 
         private fun compiled(className: String, wasm: String): FirmwareImage {
+            hugeMethodsChecked
             val cls = try {
                 Class.forName(className)
             } catch (e: ClassNotFoundException) {
@@ -78,6 +85,21 @@ public class FirmwareImage internal constructor(
             val create = cls.getMethod("create", Instance::class.java)
             return FirmwareImage(module, Function { instance -> create.invoke(null, instance) as Machine }, "compiled:$className")
         }
+
+        /** Warns once per JVM if huge methods stay interpreted (see [compiled]). */
+        private val hugeMethodsChecked: Unit by lazy {
+            if (hugeMethodsStayInterpreted()) System.getLogger("org.pocketbot.emulator").log(
+                System.Logger.Level.WARNING,
+                "the JVM runs without -XX:-DontCompileHugeMethods: HotSpot leaves the firmware's largest functions " +
+                    "interpreted and the emulator runs at about half its speed; add the flag to the java command line",
+            )
+        }
+
+        /** True when HotSpot says it will not compile methods over 8000 bytecode bytes; false on other JVMs. */
+        internal fun hugeMethodsStayInterpreted(): Boolean = runCatching {
+            ManagementFactory.getPlatformMXBean(HotSpotDiagnosticMXBean::class.java)
+                .getVMOption("DontCompileHugeMethods").value == "true"
+        }.getOrDefault(false)
 
         /** True when the build-time compiled firmware is on the class path. */
         public fun compiledAvailable(): Boolean =

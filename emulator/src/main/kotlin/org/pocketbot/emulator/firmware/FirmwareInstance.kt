@@ -4,7 +4,7 @@ import com.dylibso.chicory.runtime.Memory
 import com.dylibso.chicory.wasm.types.MemoryLimits
 
 /** What the firmware imports (module "env" of firmware/hal/sim/sim_abi.h), answered by the simulated robot. */
-public interface FirmwareHost {
+internal interface FirmwareHost {
     /**
      * One line sensor ADC sweep: the four detectors (0..3) read now with the emitters in the bit mask lit,
      * each 0..4095, detector d in bits 16d..16d+15 (sim_abi.h line_adc_sweep).
@@ -19,7 +19,7 @@ public interface FirmwareHost {
 }
 
 /** sensor_read ids of sim_abi.h. */
-public object SimSensor {
+internal object SimSensor {
     public const val BATTERY_MV: Int = 0
     public const val CURRENT_MA: Int = 1
     public const val MCU_TEMP_DC: Int = 2
@@ -37,7 +37,7 @@ public object SimSensor {
  * firmware/hal/sim/sim_abi.h, which run in the calling thread's [FirmwareEngine] (one Chicory instance per thread
  * that every robot's firmware runs in, in turn). Not thread-safe: one thread at a time drives it.
  */
-public class FirmwareInstance(private val image: FirmwareImage, internal val host: FirmwareHost) {
+internal class FirmwareInstance(private val image: FirmwareImage, internal val host: FirmwareHost) {
     /** An engine of its own when the image's robots cannot share one. */
     private val ownEngine: FirmwareEngine? = if (image.sharesEngines) null else FirmwareEngine(image)
 

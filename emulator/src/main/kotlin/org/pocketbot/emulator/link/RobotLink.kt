@@ -5,12 +5,12 @@ import java.util.SplittableRandom
 import java.util.concurrent.ConcurrentLinkedQueue
 
 /** Receives the bytes a robot sends to its host, in order, on the emulator's stepping thread: must not block. */
-public fun interface ByteSink {
+internal fun interface ByteSink {
     public fun onBytes(bytes: ByteArray)
 }
 
 /** A host-side connection to a robot's link: gets the robot's bytes, and is told when the link drops it. */
-public interface LinkConnection : ByteSink {
+internal interface LinkConnection : ByteSink {
     /** The link went down (out of range, the emulator closed); the connection must close. */
     public fun onLinkLost(reason: String)
 }
@@ -21,7 +21,7 @@ public interface LinkConnection : ByteSink {
  * stepping thread does the rest, and tells the firmware when a host came ([takeOpen]) and when one left, once every
  * byte it sent has reached the robot ([takeClose]).
  */
-public class RobotLink internal constructor(public val index: Int, private val rng: SplittableRandom) {
+internal class RobotLink(val index: Int, private val rng: SplittableRandom) {
     @Volatile public var settings: LinkSettings = LinkSettings()
         internal set
 

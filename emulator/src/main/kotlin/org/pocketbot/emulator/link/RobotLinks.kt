@@ -7,7 +7,7 @@ import java.util.SplittableRandom
  * same [LinkSettings] (one radio). A host that connects gets the lowest free link; with none free it is refused,
  * as a robot whose links are all in use refuses another Bluetooth connection.
  */
-public class RobotLinks internal constructor(count: Int, seed: Long) {
+internal class RobotLinks(count: Int, seed: Long) {
     /** Link 0 is the robot's UART; its generator is the one a robot with a single link always had. */
     public val all: List<RobotLink> = List(count) { k -> RobotLink(k, SplittableRandom(if (k == 0) seed else seed * 31 + k)) }
 

@@ -21,7 +21,7 @@ import org.pocketbot.sdk.transport.TransportLostException
  * sockets. Each transport is a host of its own on the robot, on a link of its own; with every link in use it is
  * refused ([TransportLostException] from the constructor).
  */
-public class InProcessTransport internal constructor(
+internal class InProcessTransport(
     links: RobotLinks,
     override val address: String,
 ) : Transport, LinkConnection {
@@ -69,7 +69,7 @@ public class InProcessTransport internal constructor(
 }
 
 /** A robot of an embedded emulator, as a [Discoverer] finds it. */
-public class InProcessDevice internal constructor(
+internal class InProcessDevice(
     override val name: String,
     override val address: String,
     private val links: RobotLinks,
@@ -83,6 +83,6 @@ public class InProcessDevice internal constructor(
 }
 
 /** Finds the robots of an embedded emulator: each robot present when [discover] is collected. */
-public class InProcessDiscoverer internal constructor(private val devices: () -> List<RobotDevice>) : Discoverer {
+internal class InProcessDiscoverer(private val devices: () -> List<RobotDevice>) : Discoverer {
     override fun discover(): Flow<RobotDevice> = flow { for (d in devices()) emit(d) }
 }

@@ -74,7 +74,9 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         val firmware = if (hci) {
             try { FirmwareImage.compiledHci() } catch (e: IllegalStateException) { throw CliktError(e.message) }
         } else null
-        val emu = Emulator(w, EmulatorConfig(seed = seed, threads = threads, firmware = firmware)).also { e -> repeat(robots) { e.addRobot() } }
+        val emu = Emulator(w, EmulatorConfig(seed = seed, threads = threads, firmware = firmware)).also { e ->
+            try { repeat(robots) { e.addRobot() } } catch (full: IllegalStateException) { e.close(); throw CliktError(full.message) }
+        }
         // The lines name an address other programs reach: on the wildcard address, this machine's best network address.
         val reachable = ListenAddress.reachable(listen)
         val host = ListenAddress.hostText(reachable.first())
