@@ -19,6 +19,7 @@
 #define OP_SET_EVENT_MASK 0x0C01u
 #define OP_RESET 0x0C03u
 #define OP_WRITE_LOCAL_NAME 0x0C13u
+#define OP_READ_SCAN_ENABLE 0x0C19u
 #define OP_WRITE_SCAN_ENABLE 0x0C1Au
 #define OP_WRITE_CLASS_OF_DEVICE 0x0C24u
 #define OP_HOST_BUFFER_SIZE 0x0C33u
@@ -45,6 +46,7 @@
 #define ACL_START 0x2000u
 #define ACL_CONTINUE 0x1000u
 #define FRAGMENT_HEADER 5u /* H4 type, handle and flags, length */
+#define SCAN_INQUIRY_PAGE 0x03u /* Scan_Enable: inquiry and page scan */
 
 /* The initialisation after a reset, one command at a time (only the first three must succeed): each as its
  * opcode, parameter length and parameters; the local name is made from the settings (write_local_name()). */
@@ -62,7 +64,7 @@ static const HAL_FLASH uint8_t init_commands[] = {
     LE16(OP_WRITE_LOCAL_NAME), 0,
     LE16(OP_WRITE_CLASS_OF_DEVICE), 3, (uint8_t)BT_CLASS_OF_DEVICE, (uint8_t)(BT_CLASS_OF_DEVICE >> 8),
     (uint8_t)(BT_CLASS_OF_DEVICE >> 16),
-    LE16(OP_WRITE_SCAN_ENABLE), 1, 0x03, /* inquiry and page scan */
+    LE16(OP_WRITE_SCAN_ENABLE), 1, SCAN_INQUIRY_PAGE,
 };
 #define INIT_STEPS 9u
 #define INIT_ESSENTIAL 3u
@@ -381,6 +383,11 @@ static void command_done(uint16_t op, uint8_t status, const uint8_t *ret, uint8_
         return; /* a NOP: credits only */
     if (op == pending_op)
         pending_op = 0;
+    /* The keep-alive: scans off are a controller power-cycled behind the stack's back, its links forgotten. */
+    if (op == OP_READ_SCAN_ENABLE && state == ST_READY && (status != 0 || (len && ret[0] != SCAN_INQUIRY_PAGE))) {
+        recover();
+        return;
+    }
     if (state != ST_INIT || op != (uint16_t)(init_commands[step_at] | init_commands[step_at + 1] << 8))
         return;
     if (status != 0) {
@@ -554,7 +561,7 @@ static void send_next(void)
     else if (name_id != settings.identity.robot_id)
         write_local_name();
     else if (now_ms() - last_command_ms >= HCI_KEEPALIVE_MS)
-        command(OP_READ_BD_ADDR, NULL, 0);
+        command(OP_READ_SCAN_ENABLE, NULL, 0);
 }
 
 /* Reads a slice of the wire. \return true when the controller is being reset (nothing more this tick). */

@@ -6,7 +6,8 @@
  * commands within the controller's command credits and ACL data within its buffer count
  * (Number_Of_Completed_Packets), and supervises the wire: an H4 error, a packet cut off, a command unanswered (or no
  * command credit) for HCI_COMMAND_TIMEOUT_MS or a hardware error event drop every link and reset the controller
- * (robot_state.errors.bt_*). A keep-alive command every HCI_KEEPALIVE_MS finds a controller that went quiet.
+ * (robot_state.errors.bt_*). A keep-alive command every HCI_KEEPALIVE_MS (Read_Scan_Enable) finds a controller
+ * that went quiet, and one power-cycled behind the stack's back (its scans are off): that one is reset too.
  *
  * Links are numbered 0..BT_LINKS-1; the layer above (L2CAP) implements the hooks at the end of this header.
  */

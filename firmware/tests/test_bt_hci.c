@@ -141,11 +141,42 @@ static void a_command_unanswered_resets_the_controller_and_drops_the_links(void)
     CHECK(wire_up.framed_opened[0] == 1, "framed channel not open");
     wire_clear();
     wire_run_ms(HCI_KEEPALIVE_MS); /* the keep-alive goes out and nobody answers */
-    CHECK(wire_find_command(0x1009, 0), "no keep-alive");
+    CHECK(wire_find_command(0x0C19, 0), "no keep-alive");
     wire_run_ms(HCI_COMMAND_TIMEOUT_MS + 5);
     CHECK(robot_state.errors.bt_timeouts == 1 && robot_state.errors.bt_resets == 1, "timeouts %u resets %u",
           robot_state.errors.bt_timeouts, robot_state.errors.bt_resets);
     CHECK(wire_up.framed_closed[0] == 1 && wire_up.framed_lost[0] == 1, "link loss not reported");
+    CHECK(wire_find_command(0x0C03, 0), "no reset sent");
+    for (int i = 0; i < 30 && !hci_ready(); i++) {
+        wire_run_ms(1);
+        wire_answer_commands(27, 64);
+    }
+    CHECK(hci_ready(), "not back");
+    wire_connect(phone, 1);
+    CHECK(hci_link_addr(0) != NULL, "link not accepted again");
+}
+
+/* A controller power-cycled behind the stack's back (its UART wire kept) answers commands as before but has
+ * forgotten the links and the scans: the keep-alive (Read_Scan_Enable) finds the scans off and resets it. */
+static void a_controller_power_cycled_unnoticed_is_found_by_the_keep_alive(void)
+{
+    wire_bring_up(27, 64);
+    wire_connect(phone, 1);
+    wire_open_l2cap(1, BT_PSM_FRAMED, 0x0041, 200);
+    wire_clear();
+    const uint8_t scans_on = 0x03, scans_off = 0x00;
+    wire_run_ms(HCI_KEEPALIVE_MS);
+    CHECK(wire_find_command(0x0C19, 0), "no keep-alive");
+    wire_command_complete(0x0C19, &scans_on, 1);
+    wire_run_ms(HCI_KEEPALIVE_MS);
+    CHECK(robot_state.errors.bt_resets == 0 && hci_link_addr(0) != NULL, "a sound controller reset");
+    CHECK(wire_find_command(0x0C19, 1), "no second keep-alive");
+    wire_command_complete(0x0C19, &scans_off, 1);
+    wire_run_ms(1);
+    CHECK(robot_state.errors.bt_resets == 1 && robot_state.errors.bt_timeouts == 0, "timeouts %u resets %u",
+          robot_state.errors.bt_timeouts, robot_state.errors.bt_resets);
+    CHECK(wire_up.framed_closed[0] == 1 && wire_up.framed_lost[0] == 1, "link loss not reported");
+    wire_run_ms(3);
     CHECK(wire_find_command(0x0C03, 0), "no reset sent");
     for (int i = 0; i < 30 && !hci_ready(); i++) {
         wire_run_ms(1);
@@ -295,6 +326,7 @@ void suite_bt_hci(void)
     RUN(the_oldest_key_gives_way);
     RUN(a_command_unanswered_resets_the_controller_and_drops_the_links);
     RUN(no_command_credit_for_long_resets_the_controller);
+    RUN(a_controller_power_cycled_unnoticed_is_found_by_the_keep_alive);
     RUN(a_garbage_burst_is_counted_and_survived);
     RUN(a_lost_byte_stalls_a_packet_and_resets);
     RUN(a_full_receive_ring_is_a_wire_error);
