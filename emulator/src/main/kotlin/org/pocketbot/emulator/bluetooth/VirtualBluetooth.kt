@@ -26,10 +26,22 @@ import java.util.concurrent.TimeUnit
  */
 public class VirtualBluetooth private constructor(private val process: Process, private val log: Path) : AutoCloseable {
     /** One robot's controller: its Bluetooth address and the H4 endpoint its host (the robot) connects to. */
-    public data class Controller(val index: Int, val address: String, val h4: InetSocketAddress)
+    public class Controller internal constructor(
+        public val index: Int,
+        public val address: String,
+        public val h4: InetSocketAddress,
+    ) {
+        override fun toString(): String = "controller $index $address h4 $h4"
+    }
 
     /** The gateway's endpoints for the robot at [address]: RFCOMM as a SLIP byte stream, L2CAP as prefixed frames. */
-    public data class Bridge(val address: String, val rfcomm: InetSocketAddress, val l2cap: InetSocketAddress)
+    public class Bridge internal constructor(
+        public val address: String,
+        public val rfcomm: InetSocketAddress,
+        public val l2cap: InetSocketAddress,
+    ) {
+        override fun toString(): String = "bridge $address rfcomm $rfcomm l2cap $l2cap"
+    }
 
     private val output: BufferedReader = process.inputStream.bufferedReader()
     private val input: Writer = process.outputStream.bufferedWriter()
