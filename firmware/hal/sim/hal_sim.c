@@ -137,6 +137,14 @@ int32_t hal_sensor_read(uint8_t sensor)
     return sensor < HAL_SENSOR_COUNT ? sensor_read(sensor) : 0;
 }
 
+/* The emulator delivers a message the step after it is sent, without airtime (its IR link is a model of reach and
+ * obstacles, not of timing): the firmware keeps the 2 ms spacing it has always had there. */
+uint32_t hal_ir_message_us(uint8_t len)
+{
+    (void)len;
+    return 1000u;
+}
+
 bool hal_ir_send(const hal_ir_msg_t *m)
 {
     uint32_t lo = 0, hi = 0;

@@ -650,7 +650,10 @@ ISR(TWIC_TWIM_vect)
 /* ---- IR: USARTD0 TX on a 38 kHz carrier, receivers on USARTD0 / USARTD1 RX ------------------ */
 
 #define IR_SYNC 0xA5u
-#define IR_FRAME_MAX (HAL_IR_MESSAGE_BYTES + HAL_IR_PAYLOAD_MAX)
+#define IR_MESSAGE_BYTES 5u /* sync, sender, LED and length, power, CRC; then the payload */
+#define IR_FRAME_MAX (IR_MESSAGE_BYTES + HAL_IR_PAYLOAD_MAX)
+#define IR_BAUD 2400u
+#define IR_BITS_PER_BYTE 11u /* start bit, 8 data bits, the line code's bit, stop bit */
 #define CARRIER_PER BOARD_IR_CARRIER_PER
 
 /* The line code. The LEDs carry the carrier while TX is low, for the start bit and every 0 bit, so a byte with a
@@ -735,6 +738,11 @@ static void ir_send_frame(uint16_t f)
 {
     USARTD0.CTRLB = (uint8_t)(USART_RXEN_bm | USART_TXEN_bm | ((f & 0x100u) ? USART_TXB8_bm : 0u));
     USARTD0.DATA = (uint8_t)f;
+}
+
+uint32_t hal_ir_message_us(uint8_t len)
+{
+    return ((uint32_t)(IR_MESSAGE_BYTES + len) * IR_BITS_PER_BYTE * 1000000ul + IR_BAUD - 1u) / IR_BAUD;
 }
 
 bool hal_ir_send(const hal_ir_msg_t *m)
