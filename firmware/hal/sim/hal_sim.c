@@ -288,7 +288,7 @@ static uint8_t sim_link_take(uint8_t link, uint8_t *p, uint8_t max)
     return n;
 }
 
-static const comm_link_driver_t sim_link_driver = {false, sim_link_room, sim_link_write, sim_link_take};
+static const comm_link_driver_t sim_link_driver = {false, sim_link_room, sim_link_write, sim_link_take, NULL, NULL};
 
 /* The receive interrupt of a link; a full ring loses the byte (the emulator delivers at the baud rate, and the
  * main loop empties the ring every tick, so it never fills). */
