@@ -103,6 +103,7 @@ int32_t hal_sensor_read(uint8_t sensor)
 }
 
 bool hal_ir_send(const hal_ir_msg_t *msg) { (void)msg; return true; }
+uint32_t hal_ir_message_us(uint8_t len) { return (5u + len) * 11u * 1000000ul / 2400u; } /* the robot's IR link */
 
 void hal_eeprom_read(uint16_t addr, void *dst, uint16_t len)
 {

@@ -6,11 +6,12 @@
  * encoder captures, host link bytes both ways, an IR message heard byte by byte, the colour sensor configured
  * and read. A call's cycles (Timer1 at clk/1) include the handler's prologue and RETI; the XMEGA's interrupt
  * response and the vector's JMP (8 cycles) are added. Nothing acts on the registers: the register values a handler
- * reads are set here. Output: one line per vector, `BENCH: isr <vector> <name> worst <cycles> mean <cycles>`.
+ * reads are set here. Output: one line per vector, `BENCH: isr <vector> <name> worst <cycles> mean <cycles> calls <n>`.
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <avr/sleep.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "app.h"
@@ -53,32 +54,18 @@ static void set16(uint16_t a, uint16_t v)
     bench_xmega_io[a + 1] = (uint8_t)(v >> 8);
 }
 
-/* ---- output ---- */
+/* ---- output: printf on UART0, which simavr prints ---- */
 
-static void out_c(char c)
+static int put(char c, FILE *f)
 {
+    (void)f;
     while (!(UCSR0A & (1 << UDRE0))) {
     }
     UDR0 = (uint8_t)c;
+    return 0;
 }
 
-static void out_s(const char *s)
-{
-    while (*s)
-        out_c(*s++);
-}
-
-static void out_u(uint32_t v)
-{
-    char d[10];
-    uint8_t n = 0;
-    do {
-        d[n++] = (char)('0' + v % 10u);
-        v /= 10u;
-    } while (v);
-    while (n)
-        out_c(d[--n]);
-}
+static FILE uart0 = FDEV_SETUP_STREAM(put, NULL, _FDEV_SETUP_WRITE);
 
 /* ---- timing ---- */
 
@@ -193,11 +180,11 @@ static void a_beacon(void)
 {
     time_to(100000u);
     call(19);
-    transmit_message(HAL_IR_MESSAGE_BYTES);
+    transmit_message(5);
     for (uint8_t m = 1; m < 4; m++) {
         time_to(now_us + hal_ir_message_us(0) + 1000u);
         call(18);
-        transmit_message(HAL_IR_MESSAGE_BYTES);
+        transmit_message(5);
     }
 }
 
@@ -208,7 +195,7 @@ static void a_message_heard(void)
     time_to(now_us + 100000u);
     if (!hal_ir_send(&m))
         return;
-    uint8_t n = HAL_IR_MESSAGE_BYTES + 8u;
+    uint8_t n = 5u + 8u;
     transmit_message(n);
     for (uint8_t side = 0; side < 2; side++) {
         for (uint8_t i = 0; i < n; i++) {
@@ -291,19 +278,11 @@ int main(void)
     encoder_edges();
     host_link_bytes();
     colour_reads();
+    stdout = &uart0;
     for (uint8_t i = 0; i < sizeof stats / sizeof stats[0]; i++) {
-        const stat_t *s = &stats[i];
-        out_s("BENCH: isr ");
-        out_u(s->vector);
-        out_c(' ');
-        out_s(s->name);
-        out_s(" worst ");
-        out_u(s->worst);
-        out_s(" mean ");
-        out_u(s->n ? s->sum / s->n : 0);
-        out_s(" calls ");
-        out_u(s->n);
-        out_s(".\n");
+        const stat_t *t = &stats[i];
+        printf("BENCH: isr %u %s worst %lu mean %lu calls %u\n", t->vector, t->name, (unsigned long)t->worst,
+               (unsigned long)(t->n ? t->sum / t->n : 0), t->n);
     }
     while (!(UCSR0A & (1 << UDRE0))) {
     }

@@ -19,6 +19,17 @@ static void stream_write(uint8_t link, const uint8_t *p, uint16_t n)
     rfcomm_write(link, p, n);
 }
 
+/* comm SLIP-encodes into the staging ring itself when a frame goes to this link alone (no copy through a chunk). */
+static uint8_t *stream_ring(uint8_t link, uint8_t *pos)
+{
+    return rfcomm_tx_ring(link, pos);
+}
+
+static void stream_commit(uint8_t link, uint8_t pos)
+{
+    rfcomm_tx_commit(link, pos);
+}
+
 /* The framed channel: one frame per SDU, written straight into the transmit ring. Room is reported for the
  * longest frame or none (comm offers again later), which keeps the check to one. */
 static uint16_t framed_room(uint8_t link)
@@ -36,8 +47,8 @@ static void framed_write(uint8_t link, const uint8_t *p, uint16_t n)
     hci_acl_end();
 }
 
-static const comm_link_driver_t stream_driver = {false, stream_room, stream_write, NULL};
-static const comm_link_driver_t framed_driver = {true, framed_room, framed_write, NULL};
+static const comm_link_driver_t stream_driver = {false, stream_room, stream_write, NULL, stream_ring, stream_commit};
+static const comm_link_driver_t framed_driver = {true, framed_room, framed_write, NULL, NULL, NULL};
 
 void bt_stream_opened(uint8_t link)
 {

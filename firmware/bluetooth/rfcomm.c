@@ -347,6 +347,17 @@ void rfcomm_write(uint8_t link, const uint8_t *p, uint16_t n)
     }
 }
 
+uint8_t *rfcomm_tx_ring(uint8_t link, uint8_t *pos)
+{
+    *pos = rs[link].head;
+    return rs[link].buf;
+}
+
+void rfcomm_tx_commit(uint8_t link, uint8_t pos)
+{
+    rs[link].head = pos;
+}
+
 /* Writes the next slice of the frame being written (and its end). */
 static void write_slice(uint8_t link)
 {

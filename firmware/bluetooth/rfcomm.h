@@ -35,6 +35,11 @@ void rfcomm_task(void);
 uint16_t rfcomm_tx_room(uint8_t link);
 /** Stages `n` bytes (at most rfcomm_tx_room()). */
 void rfcomm_write(uint8_t link, const uint8_t *p, uint16_t n);
+/** The staging ring of `link` (RFCOMM_TX_SIZE bytes, one-byte indices), `*pos` set to where the next byte goes: a
+ *  writer that stores its bytes there itself (at most rfcomm_tx_room()) stages them with rfcomm_tx_commit(). */
+uint8_t *rfcomm_tx_ring(uint8_t link, uint8_t *pos);
+/** Stages the ring's bytes up to `pos`. */
+void rfcomm_tx_commit(uint8_t link, uint8_t pos);
 
 /* rfcomm_on_pdu() and rfcomm_channel_closed() are L2CAP hooks (l2cap.h). */
 

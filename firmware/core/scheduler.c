@@ -103,6 +103,19 @@ void scheduler_cancel(uint8_t ch)
     hal_irq_restore(s);
 }
 
+/* A long delay's interrupt: due (its time kept for scheduler_again()), or an intermediate wake-up, re-armed. Apart
+ * from scheduler_isr(): the registers it needs were saved in every interrupt of a short delay too. */
+static __attribute__((noinline)) bool long_delay_due(channel_t *c, uint8_t ch)
+{
+    uint32_t now = hal_micros();
+    if ((int32_t)(c->target - now) > 0) {
+        arm(ch, now);
+        return false;
+    }
+    c->fired = c->target;
+    return true;
+}
+
 void scheduler_isr(uint8_t ch)
 {
     if (ch >= HAL_SCHED_CHANNELS)
@@ -110,14 +123,8 @@ void scheduler_isr(uint8_t ch)
     channel_t *c = &channels[ch];
     if (!c->active)
         return;
-    if (!c->short_delay) {
-        uint32_t now = hal_micros();
-        if ((int32_t)(c->target - now) > 0) { /* an intermediate wake-up of a long delay */
-            arm(ch, now);
-            return;
-        }
-        c->fired = c->target;
-    }
+    if (!c->short_delay && !long_delay_due(c, ch))
+        return;
     c->active = 0;
     c->cb();
 }

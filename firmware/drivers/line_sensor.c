@@ -1,7 +1,6 @@
 #include "line_sensor.h"
 
 #include <stddef.h>
-#include <string.h>
 
 #include "core/data.h"
 #include "core/fixed.h"
@@ -230,17 +229,17 @@ __attribute__((noinline)) void line_sensor_task(void)
     if (ready) {
         ready = 0;
         uint16_t spot_raw[LINE_SPOTS];
-#define LIT_MINUS_DARK(lit, d) (lit[d] > dark[d] ? (uint16_t)(lit[d] - dark[d]) : 0u)
-        spot_raw[0] = LIT_MINUS_DARK(lit_a, 0);
-        spot_raw[1] = LIT_MINUS_DARK(lit_b, 0);
-        spot_raw[2] = LIT_MINUS_DARK(lit_b, 1);
-        spot_raw[3] = LIT_MINUS_DARK(lit_a, 1);
-        spot_raw[4] = LIT_MINUS_DARK(lit_a, 2);
-        spot_raw[5] = LIT_MINUS_DARK(lit_b, 2);
-        spot_raw[6] = LIT_MINUS_DARK(lit_b, 3);
-        spot_raw[7] = LIT_MINUS_DARK(lit_a, 3);
-#undef LIT_MINUS_DARK
-        memcpy(robot_state.line.raw, spot_raw, sizeof spot_raw);
+        /* Each reading stored in the state as it is made (copying the 16 bytes after took 117 cycles). */
+#define SPOT(i, lit, d) robot_state.line.raw[i] = spot_raw[i] = (lit[d] > dark[d] ? (uint16_t)(lit[d] - dark[d]) : 0u)
+        SPOT(0, lit_a, 0);
+        SPOT(1, lit_b, 0);
+        SPOT(2, lit_b, 1);
+        SPOT(3, lit_a, 1);
+        SPOT(4, lit_a, 2);
+        SPOT(5, lit_b, 2);
+        SPOT(6, lit_b, 3);
+        SPOT(7, lit_a, 3);
+#undef SPOT
         int16_t pos = robot_state.line.position; /* where the line was: the branch to keep at a fork */
         uint8_t flags = robot_state.line.flags;
         if (line_sensor_evaluate(spot_raw, NULL, &pos)) {

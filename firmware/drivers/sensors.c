@@ -60,10 +60,10 @@ void sensors_task(void)
         robot_state.accel.z_mg = to_i16(hal_sensor_read(HAL_SENSOR_ACCEL_Z_MG));
         break;
     default: {
-        int32_t clear = hal_sensor_read(HAL_SENSOR_COLOUR_CLEAR);
         uint8_t r = to_u8(hal_sensor_read(HAL_SENSOR_COLOUR_R));
         uint8_t g = to_u8(hal_sensor_read(HAL_SENSOR_COLOUR_G));
         uint8_t b = to_u8(hal_sensor_read(HAL_SENSOR_COLOUR_B));
+        int32_t clear = hal_sensor_read(HAL_SENSOR_COLOUR_CLEAR);
         uint8_t c = to_u8(clear);
         robot_state.colour.red = r;
         robot_state.colour.green = g;

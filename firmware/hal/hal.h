@@ -125,18 +125,10 @@ int32_t hal_sensor_read(uint8_t sensor);
 /* ---- IR proximity --------------------------------------------------------------------------- */
 
 #define HAL_IR_PAYLOAD_MAX 8u
-/** The IR link's pace, the same on every target (the emulator's timing follows the robot's link): bytes at
- *  2400 Bd, 11 bits each (start bit, 8 data bits, the line code's bit, stop bit), and 5 bytes in a message besides
- *  its payload (sync, sender, LED and length, power, CRC). */
-#define HAL_IR_BAUD 2400u
-#define HAL_IR_BITS_PER_BYTE 11u
-#define HAL_IR_MESSAGE_BYTES 5u
 /** \return how long the transmitter is busy with a message of `len` payload bytes (us): hal_ir_send() refuses
- *  another one until its last stop bit has left. */
-static inline uint32_t hal_ir_message_us(uint8_t len)
-{
-    return ((uint32_t)(HAL_IR_MESSAGE_BYTES + len) * HAL_IR_BITS_PER_BYTE * 1000000ul + HAL_IR_BAUD - 1u) / HAL_IR_BAUD;
-}
+ *  another one until then. On the robot, its frames on the IR link (5 + len bytes of 11 bits at 2400 Bd: 23 ms
+ *  without payload); in the emulator, whose IR link delivers a message without airtime, 1 ms. */
+uint32_t hal_ir_message_us(uint8_t len);
 /** One IR message: who sent it, from which LED, at what power, with an optional payload. */
 typedef struct {
     uint8_t sender_id;

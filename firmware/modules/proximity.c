@@ -27,14 +27,16 @@ typedef struct {
 } side_t;
 
 static side_t sides[2];
-static uint16_t published_hold; /* settings.proximity.hold_ms at the last publish() */
+static uint16_t hold;           /* how long a sighting is held: hold_for() */
+static uint8_t hold_gen;        /* settings_generation it was computed for */
+static uint16_t published_hold; /* hold at the last publish() */
 
 /* Beacon transmission, driven from the scheduler interrupts. */
 static volatile uint8_t burst_msg;    /* next message of the running beacon */
 static volatile uint8_t burst_msgs;   /* messages in it */
 static uint8_t level;                 /* power level of the next beacon */
 static hal_ir_msg_t payload_msg;      /* pending payload, len > 0 while pending */
-static volatile uint8_t payload_pending, payload_in_burst; /* queued; part of the running beacon */
+static volatile uint8_t payload_pending, payload_in_burst;
 static proximity_payload_cb_t payload_cb;
 
 /* Last payload forwarded, to drop the copies a beacon carries from its four LEDs; `pending` while its
@@ -62,8 +64,18 @@ static uint32_t message_slot_us(uint8_t len)
     return hal_ir_message_us(len) + PROXIMITY_MSG_GAP_US;
 }
 
-/* A beacon: the pending payload from each LED first (a conversation waits at most a beacon period for it), then
- * one message per LED at this beacon's power level. */
+/* hold_ms, but at least a cycle of the three beacon powers and a period: held shorter, a distance class would
+ * lapse between two beacons of its power. On the robot a beacon takes 96 ms on the IR link, so at the default
+ * 40 ms period beacons go every 120 ms and a cycle takes 360 ms. */
+static uint16_t hold_for(void)
+{
+    uint16_t period = settings.proximity.beacon_period_ms < 10u ? 10u : settings.proximity.beacon_period_ms;
+    uint32_t airtime_ms = LEDS * message_slot_us(0) / 1000u;
+    uint32_t beacon_ms = (airtime_ms + period - 1u) / period * period; /* a beacon outlasting the period skips one */
+    uint32_t least = LEVELS * beacon_ms + period;
+    return settings.proximity.hold_ms > least ? settings.proximity.hold_ms : (uint16_t)least;
+}
+
 static void send_next(void)
 {
     uint8_t k = burst_msg;
@@ -71,18 +83,17 @@ static void send_next(void)
         return;
     hal_ir_msg_t m;
     uint8_t full = settings.proximity.ir_power > 100u ? 100u : settings.proximity.ir_power;
-    bool payload = payload_in_burst && k < LEDS;
-    if (payload) {
-        memcpy(&m, &payload_msg, sizeof m);
+    if (k < LEDS) {
         m.sender_id = settings.identity.robot_id;
         m.led = k;
-    } else {
-        m.sender_id = settings.identity.robot_id;
-        m.led = (uint8_t)(k % LEDS);
         m.power = (uint8_t)(full >> level); /* 100, 50, 25 % of the set power */
         if (m.power == 0)
             m.power = 1;
         m.len = 0;
+    } else {
+        memcpy(&m, &payload_msg, sizeof m);
+        m.sender_id = settings.identity.robot_id;
+        m.led = (uint8_t)(k - LEDS);
     }
     if (!ir_transmit(&m)) { /* transmitter still busy: try again shortly */
         scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_GAP_US, send_next);
@@ -90,10 +101,10 @@ static void send_next(void)
     }
     robot_state.indicators.ir_power = m.power;
     burst_msg = (uint8_t)(k + 1u);
-    if (payload && burst_msg == LEDS)
-        payload_pending = 0; /* sent from every LED: the next payload may come */
     if (burst_msg < burst_msgs)
         scheduler_after(SCHED_CH_PROX_TX, message_slot_us(m.len), send_next);
+    else if (payload_in_burst)
+        payload_pending = payload_in_burst = 0;
 }
 
 static void beacon(void)
@@ -123,7 +134,9 @@ void proximity_init(void)
 {
     memset(sides, 0, sizeof sides);
     sides[0].dirty = sides[1].dirty = 1;
-    published_hold = settings.proximity.hold_ms;
+    hold_gen = settings_generation;
+    hold = hold_for();
+    published_hold = hold;
     memset(&last_fwd, 0, sizeof last_fwd);
     burst_msg = burst_msgs = 0;
     level = 0;
@@ -183,7 +196,6 @@ static void forward_pending(void)
 static void heard(uint8_t side_no, const hal_ir_msg_t *m, uint32_t now)
 {
     side_t *s = &sides[side_no];
-    uint16_t hold = settings.proximity.hold_ms;
     s->dirty = 1;
     if (m->sender_id == settings.identity.robot_id) {
         s->obstacle_ms = now;
@@ -232,7 +244,6 @@ static inline __attribute__((always_inline)) bool live(uint32_t t, uint32_t now,
 
 static void publish(pb_proximity_side_t *out, side_t *s, uint32_t now)
 {
-    uint16_t hold = settings.proximity.hold_ms;
     uint16_t oldest = 0;
     uint8_t flags = 0;
     if (s->heard_obstacle && live(s->obstacle_ms, now, hold, &oldest))
@@ -274,8 +285,12 @@ void proximity_task(void)
         heard(side, m, now);
         ir_pop();
     }
-    bool hold_changed = published_hold != settings.proximity.hold_ms;
-    published_hold = settings.proximity.hold_ms;
+    if (hold_gen != settings_generation) {
+        hold_gen = settings_generation;
+        hold = hold_for();
+    }
+    bool hold_changed = published_hold != hold;
+    published_hold = hold;
     publish_if_changed(&robot_state.proximity.front, &sides[0], now, hold_changed);
     publish_if_changed(&robot_state.proximity.rear, &sides[1], now, hold_changed);
 }

@@ -17,9 +17,9 @@
 
 #include "hal/hal.h"
 
-/** The pause between the messages of a beacon: each message takes its time on the IR link (hal_ir_message_us(),
- *  about 23 ms without payload), then the LEDs rest this long. A beacon that outlasts beacon_period_ms delays the
- *  next one to the following period. */
+/** The pause between the messages of a beacon: each message takes its time on the IR link (hal_ir_message_us():
+ *  23 ms without payload on the robot), then the LEDs rest this long. A beacon that outlasts beacon_period_ms
+ *  delays the next one to the following period; a sighting is held at least a cycle of the beacon powers. */
 #define PROXIMITY_MSG_GAP_US 1000u
 
 /** Starts the beacons and registers `ir_send` with comm. */

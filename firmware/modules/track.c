@@ -27,9 +27,8 @@
  *  it is waited for; heard far, it is approached at half speed (the token holder's boost would catch it up). */
 #define VANISH_MS 1500u
 /** An offer of the token not accepted within this long is withdrawn (the holder still has the token) and made
- *  again, to whichever robot is close ahead then: about four beacons that carry a message (each about 250 ms on
- *  the IR link, the next one waits for it), time for an answer to come back. */
-#define OFFER_TIMEOUT_MS 1200u
+ *  again, to whichever robot is close ahead then: about ten beacons, time for an answer to come back. */
+#define OFFER_TIMEOUT_MS 400u
 /** Searches for the line that meet the obstacle again before giving up. */
 #define MAX_RETRIES 3u
 /** Rounds of a search for a lost line (sweep, back up) before the robot gives up and stands still. */

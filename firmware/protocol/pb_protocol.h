@@ -299,8 +299,8 @@ PB_STATIC_ASSERT(offsetof(pb_settings_motors_t, pwm_limit) == 0, "pb_settings_mo
 /** IR proximity: beacons to other robots and obstacle detection. */
 typedef struct PB_PACKED {
     uint8_t ir_power; /**< highest beacon power; 0 turns the beacon off [percent] */
-    uint16_t beacon_period_ms; /**< period of IR beacons; a beacon (four messages, 96 ms on the IR link) that outlasts it delays the next [ms] */
-    uint16_t hold_ms; /**< how long a sighting stays in the state; longer than a cycle of the three beacon powers (three beacon periods) [ms] */
+    uint16_t beacon_period_ms; /**< period of IR beacons [ms] */
+    uint16_t hold_ms; /**< how long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link) [ms] */
 } pb_settings_proximity_t;
 PB_STATIC_ASSERT(sizeof(pb_settings_proximity_t) == 5, "pb_settings_proximity_t size");
 PB_STATIC_ASSERT(offsetof(pb_settings_proximity_t, ir_power) == 0, "pb_settings_proximity_t.ir_power offset");

@@ -95,7 +95,7 @@ const PB_FLASH pb_settings_t pb_settings_defaults = {
     .encoder = {.pulses_per_rev = 40, .speed_timeout_ms = 80},
     .geometry = {.wheel_diameter_m = 0x1.26e9780000000p-7f, .wheel_base_m = 0x1.a9fbe80000000p-6f},
     .motors = {.pwm_limit = 1000},
-    .proximity = {.ir_power = 100, .beacon_period_ms = 100, .hold_ms = 450},
+    .proximity = {.ir_power = 100, .beacon_period_ms = 40, .hold_ms = 250},
     .track = {.speed_mps = 0x1.eb851e0000000p-4f, .token_boost_percent = 100, .token_origin_id = 1},
     .link = {.failsafe_timeout_ms = 1000},
     .debug = {.level = 1},

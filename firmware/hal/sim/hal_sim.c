@@ -137,6 +137,14 @@ int32_t hal_sensor_read(uint8_t sensor)
     return sensor < HAL_SENSOR_COUNT ? sensor_read(sensor) : 0;
 }
 
+/* The emulator delivers a message the step after it is sent, without airtime (its IR link is a model of reach and
+ * obstacles, not of timing): the firmware keeps the 2 ms spacing it has always had there. */
+uint32_t hal_ir_message_us(uint8_t len)
+{
+    (void)len;
+    return 1000u;
+}
+
 bool hal_ir_send(const hal_ir_msg_t *m)
 {
     uint32_t lo = 0, hi = 0;
@@ -280,7 +288,7 @@ static uint8_t sim_link_take(uint8_t link, uint8_t *p, uint8_t max)
     return n;
 }
 
-static const comm_link_driver_t sim_link_driver = {false, sim_link_room, sim_link_write, sim_link_take};
+static const comm_link_driver_t sim_link_driver = {false, sim_link_room, sim_link_write, sim_link_take, NULL, NULL};
 
 /* The receive interrupt of a link; a full ring loses the byte (the emulator delivers at the baud rate, and the
  * main loop empties the ring every tick, so it never fills). */

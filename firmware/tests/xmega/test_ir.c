@@ -88,9 +88,12 @@ static void beacons_leave_byte_by_byte_through_their_own_led(void)
     robot_run_us(1200000);
     message_t msg[64];
     int n = messages(msg, 64);
-    CHECK(n >= 40 && n <= 52, "%d beacon messages in 1.2 s (4 every %u ms)", n, settings.proximity.beacon_period_ms);
+    /* A beacon takes 96 ms on the link: at the 40 ms period one goes every 80 or 120 ms. */
+    CHECK(n >= 36 && n <= 64, "%d beacon messages in 1.2 s", n);
     if (n == 0)
         return;
+    if (msg[n - 1].n < 5)
+        n--; /* the last one was still going out */
     int bad_led = 0, bad_power = 0, bad = 0;
     for (int k = 0; k < n; k++) {
         const message_t *m = &msg[k];
@@ -174,7 +177,7 @@ static uint64_t hear(uint8_t u, uint8_t sender, uint8_t led, uint8_t power, cons
     if (len)
         memcpy(raw + 4, data, len);
     raw[4 + len] = crc8(raw + 1, (uint8_t)(3 + len));
-    uint64_t frame = (uint64_t)(11.0 * (double)XM_HZ / HAL_IR_BAUD);
+    uint64_t frame = (uint64_t)(11.0 * (double)XM_HZ / 2400.0) /* 11-bit frames at 2400 Bd */;
     for (uint8_t i = 0; i < 5 + len; i++) {
         at += frame;
         xm_usart_rx_at(u, line_code(raw[i]), at, false);

@@ -184,10 +184,10 @@ public class ProximitySettings internal constructor(s: SettingsBase) {
     /** Highest beacon power; 0 turns the beacon off (0..100, percent). Setting `proximity.ir_power`. */
     public val irPower: IntSetting = s.int("proximity.ir_power")
 
-    /** Period of IR beacons; a beacon (four messages, 96 ms on the IR link) that outlasts it delays the next (10..10000, ms). Setting `proximity.beacon_period_ms`. */
+    /** Period of IR beacons (10..10000, ms). Setting `proximity.beacon_period_ms`. */
     public val beaconPeriodMs: IntSetting = s.int("proximity.beacon_period_ms")
 
-    /** How long a sighting stays in the state; longer than a cycle of the three beacon powers (three beacon periods) (10..10000, ms). Setting `proximity.hold_ms`. */
+    /** How long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link) (10..10000, ms). Setting `proximity.hold_ms`. */
     public val holdMs: IntSetting = s.int("proximity.hold_ms")
 }
 

@@ -858,9 +858,9 @@ public class SettingsMotors(
 public class SettingsProximity(
     /** highest beacon power; 0 turns the beacon off, in percent */
     public val irPower: Int,
-    /** period of IR beacons; a beacon (four messages, 96 ms on the IR link) that outlasts it delays the next, in ms */
+    /** period of IR beacons, in ms */
     public val beaconPeriodMs: Int,
-    /** how long a sighting stays in the state; longer than a cycle of the three beacon powers (three beacon periods), in ms */
+    /** how long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link), in ms */
     public val holdMs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -2906,8 +2906,8 @@ public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
     SettingsFieldInfo("geometry.wheel_base_m", 155, FieldType.F32, 1, 0.005, 0.5, "m", "distance between the wheels (gauge)"),
     SettingsFieldInfo("motors.pwm_limit", 159, FieldType.U16, 1, 0.0, 1000.0, "permille", "largest PWM duty the controllers may command"),
     SettingsFieldInfo("proximity.ir_power", 161, FieldType.U8, 1, 0.0, 100.0, "percent", "highest beacon power; 0 turns the beacon off"),
-    SettingsFieldInfo("proximity.beacon_period_ms", 162, FieldType.U16, 1, 10.0, 10000.0, "ms", "period of IR beacons; a beacon (four messages, 96 ms on the IR link) that outlasts it delays the next"),
-    SettingsFieldInfo("proximity.hold_ms", 164, FieldType.U16, 1, 10.0, 10000.0, "ms", "how long a sighting stays in the state; longer than a cycle of the three beacon powers (three beacon periods)"),
+    SettingsFieldInfo("proximity.beacon_period_ms", 162, FieldType.U16, 1, 10.0, 10000.0, "ms", "period of IR beacons"),
+    SettingsFieldInfo("proximity.hold_ms", 164, FieldType.U16, 1, 10.0, 10000.0, "ms", "how long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link)"),
     SettingsFieldInfo("track.speed_mps", 166, FieldType.F32, 1, 0.03, 0.3, "m/s", "cruise speed on the line"),
     SettingsFieldInfo("track.token_boost_percent", 170, FieldType.U8, 1, 0.0, 100.0, "percent", "the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead"),
     SettingsFieldInfo("track.token_origin_id", 171, FieldType.U8, 1, 0.0, 254.0, "", "the robot with this id creates the token at its first start; 0: none does"),
@@ -2916,4 +2916,4 @@ public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
 )
 
 /** The settings compiled into the firmware. */
-public val SETTINGS_DEFAULTS: Settings = Settings(SettingsIdentity(1, "PocketBot"), SettingsSync(1, 100), SettingsScheduler(1000), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x471c4000.toInt()), Float.fromBits(0x42480000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x40000000.toInt())), Pid(Float.fromBits(0x39d1b717.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x3b03126f.toInt()), Float.fromBits(0x447a0000.toInt())), SettingsProfile(Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3ca3d70a.toInt())), SettingsLineFollow(Float.fromBits(0x3e19999a.toInt()), Float.fromBits(0x3d8f5c29.toInt()), Float.fromBits(0x3e800000.toInt()), 300, 1), SettingsLineSensor(listOf(100, 100, 100, 100, 100, 100, 100, 100), listOf(2000, 2000, 2000, 2000, 2000, 2000, 2000, 2000), 250), SettingsEncoder(40, 80), SettingsGeometry(Float.fromBits(0x3c1374bc.toInt()), Float.fromBits(0x3cd4fdf4.toInt())), SettingsMotors(1000), SettingsProximity(100, 100, 450), SettingsTrack(Float.fromBits(0x3df5c28f.toInt()), 100, 1), SettingsLink(1000), SettingsDebug(1))
+public val SETTINGS_DEFAULTS: Settings = Settings(SettingsIdentity(1, "PocketBot"), SettingsSync(1, 100), SettingsScheduler(1000), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x451c4000.toInt()), Float.fromBits(0x42f00000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x42200000.toInt())), Pid(Float.fromBits(0x471c4000.toInt()), Float.fromBits(0x42480000.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x40000000.toInt())), Pid(Float.fromBits(0x39d1b717.toInt()), Float.fromBits(0x00000000.toInt()), Float.fromBits(0x3b03126f.toInt()), Float.fromBits(0x447a0000.toInt())), SettingsProfile(Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3f800000.toInt()), Float.fromBits(0x3ca3d70a.toInt())), SettingsLineFollow(Float.fromBits(0x3e19999a.toInt()), Float.fromBits(0x3d8f5c29.toInt()), Float.fromBits(0x3e800000.toInt()), 300, 1), SettingsLineSensor(listOf(100, 100, 100, 100, 100, 100, 100, 100), listOf(2000, 2000, 2000, 2000, 2000, 2000, 2000, 2000), 250), SettingsEncoder(40, 80), SettingsGeometry(Float.fromBits(0x3c1374bc.toInt()), Float.fromBits(0x3cd4fdf4.toInt())), SettingsMotors(1000), SettingsProximity(100, 40, 250), SettingsTrack(Float.fromBits(0x3df5c28f.toInt()), 100, 1), SettingsLink(1000), SettingsDebug(1))
