@@ -150,6 +150,9 @@ class BluetoothEndToEndTest {
         bt.reset(1)
         val result = handle.await()
         val drove = travel(start, sim)
+        // The controller answered on as before: the robot's keep-alive alone found it power-cycled and reset it.
+        val errors = sim.state().errors
+        assertTrue(errors.btResets == 1 && errors.btTimeouts == 0 && errors.btWire == 0, "the robot's counters: $errors")
         assertTrue(result.outcome == MovementOutcome.FINISHED || result.outcome == MovementOutcome.FAILSAFE, "outcome $result")
         assertTrue(abs(assertNotNull(result.done) - drove) < 0.005, "reported ${result.done} m, ground truth $drove m")
         assertTruthful(drive(robot, sim, Movement.Straight(0.03, 0.1)), MovementOutcome.FINISHED)
