@@ -4,7 +4,6 @@ import kotlinx.coroutines.CancellationException
 import kotlinx.coroutines.CompletableDeferred
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Job
-import kotlinx.coroutines.NonCancellable
 import kotlinx.coroutines.channels.BufferOverflow
 import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.MutableSharedFlow
@@ -421,8 +420,8 @@ internal class Link(
         setConnection(ConnectionState.Closed(cause))
         val transport = current?.transport
         if (goodbye && connected && transport != null) {
-            // Outside the robot's scope, which ends now; bounded by a command timeout.
-            CoroutineScope(context).launch(NonCancellable) {
+            // Outside the robot's scope, which ends now (a job of its own); bounded by a command timeout.
+            CoroutineScope(context + Job()).launch {
                 try {
                     withTimeoutOrNull(options.commandTimeout) { transport.send(table.open(Goodbye(QueueOnLeave.FINISH.ordinal)).frame) }
                 } catch (e: Throwable) {
