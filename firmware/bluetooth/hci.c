@@ -383,8 +383,9 @@ static void command_done(uint16_t op, uint8_t status, const uint8_t *ret, uint8_
         return; /* a NOP: credits only */
     if (op == pending_op)
         pending_op = 0;
-    /* The keep-alive: scans off are a controller power-cycled behind the stack's back, its links forgotten. */
-    if (op == OP_READ_SCAN_ENABLE && state == ST_READY && (status != 0 || (len && ret[0] != SCAN_INQUIRY_PAGE))) {
+    /* The keep-alive: scans off are a controller power-cycled behind the stack's back, its links forgotten (one
+     * that refuses the command, as Bumble's did, only shows it answers). */
+    if (op == OP_READ_SCAN_ENABLE && state == ST_READY && status == 0 && len && ret[0] != SCAN_INQUIRY_PAGE) {
         recover();
         return;
     }

@@ -33,6 +33,17 @@ FRAMED_UUID = core.UUID("6e2a6f10-5b1e-4c3a-9a4e-70b0c4e7b001")
 SPP_UUID = core.UUID.from_16_bits(0x1101)
 
 
+class RobotController(Controller):
+    """Bumble's controller, answering Read_Scan_Enable (the robot's keep-alive) as a real one does: Bumble knows no
+    class for it, so the command arrives generic and would go unanswered."""
+
+    def on_hci_read_scan_enable_command(self, command):
+        scans = bytes([hci.HCI_SUCCESS, self.classic_scan_enable])
+        self.send_hci_packet(hci.HCI_Command_Complete_Event(
+            num_hci_command_packets=1, command_opcode=command.op_code,
+            return_parameters=hci.HCI_GenericReturnParameters(data=scans)))
+
+
 class RobotWire(asyncio.Protocol):
     """The robot's controller on the far side of a TCP connection carrying H4, with an optional trace."""
 
@@ -268,7 +279,7 @@ async def main():
     args = parser.parse_args()
 
     link = LocalLink()
-    robot_ctrl = Controller("robot", link=link, public_address=ROBOT_ADDRESS)
+    robot_ctrl = RobotController("robot", link=link, public_address=ROBOT_ADDRESS)
     trace = [] if (args.trace or args.trace_c) else None
     wire = RobotWire(robot_ctrl, trace)
     loop = asyncio.get_running_loop()

@@ -177,8 +177,12 @@ static void a_controller_power_cycled_unnoticed_is_found_by_the_keep_alive(void)
     CHECK(wire_find_command(0x0C19, 0), "no keep-alive");
     wire_command_complete(0x0C19, &scans_on, 1);
     wire_run_ms(HCI_KEEPALIVE_MS);
-    CHECK(robot_state.errors.bt_resets == 0 && hci_link_addr(0) != NULL, "a sound controller reset");
     CHECK(wire_find_command(0x0C19, 1), "no second keep-alive");
+    const uint8_t unknown[4] = {1, 0x19, 0x0C, 0x01}; /* a controller without the command: Unknown HCI Command */
+    wire_event(0x0E, unknown, 4);
+    wire_run_ms(HCI_KEEPALIVE_MS);
+    CHECK(robot_state.errors.bt_resets == 0 && hci_link_addr(0) != NULL, "a sound controller reset");
+    CHECK(wire_find_command(0x0C19, 2), "no third keep-alive");
     wire_command_complete(0x0C19, &scans_off, 1);
     wire_run_ms(1);
     CHECK(robot_state.errors.bt_resets == 1 && robot_state.errors.bt_timeouts == 0, "timeouts %u resets %u",
