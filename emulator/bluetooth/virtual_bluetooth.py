@@ -58,7 +58,8 @@ class VirtualController(Controller):
     """A Bumble controller that behaves as a real one where PocketBot's stack depends on it: a page reaches it only
     while its host has page scan on, a connection request its host leaves unanswered is refused after the
     Connection Accept Timeout (Bumble's would wait forever), HCI_Reset drops its links and scans (Bumble's keeps
-    them), and its ACL buffers are those of a typical BR/EDR module instead of Bumble's LE-sized 27 bytes.
+    them), Read_Scan_Enable is answered (Bumble's leaves it unanswered; the robot's keep-alive reads it), and its ACL
+    buffers are those of a typical BR/EDR module instead of Bumble's LE-sized 27 bytes.
 
     A link it drops is reported to the peer at once, as if its supervision timeout (20 s by default) had passed."""
 
@@ -74,6 +75,13 @@ class VirtualController(Controller):
                 return
             asyncio.get_running_loop().call_later(CONNECTION_ACCEPT_TIMEOUT_S, self.accept_timeout, sender_address)
         super().on_lmp_packet(sender_address, packet)
+
+    def on_hci_read_scan_enable_command(self, command):
+        # Bumble knows no Read_Scan_Enable class: the command arrives generic, and its Command Complete is sent here.
+        scans = bytes([hci.HCI_SUCCESS, self.classic_scan_enable])
+        self.send_hci_packet(hci.HCI_Command_Complete_Event(
+            num_hci_command_packets=1, command_opcode=command.op_code,
+            return_parameters=hci.HCI_GenericReturnParameters(data=scans)))
 
     def on_hci_reset_command(self, command):
         self.drop_links()
