@@ -20,13 +20,15 @@ internal class H4Uart(private val link: RobotLink, private val controller: InetS
     @Volatile private var closed = false
     @Volatile private var socket: Socket? = null
     private val out = LinkedBlockingQueue<ByteArray>()
-    private val thread = Thread({ run() }, "emulator-h4-$label").apply { isDaemon = true; start() }
 
     /** The link's side: bytes the firmware sent reach [onBytes] on the stepping thread, which must not block. */
     private val connection = object : LinkConnection {
         override fun onBytes(bytes: ByteArray) { out.add(bytes) }
         override fun onLinkLost(reason: String) { runCatching { socket?.close() } }
     }
+
+    // Last: the thread uses everything above.
+    private val thread = Thread({ run() }, "emulator-h4-$label").apply { isDaemon = true; start() }
 
     private fun run() {
         while (!closed) {
@@ -36,7 +38,7 @@ internal class H4Uart(private val link: RobotLink, private val controller: InetS
                     s.connect(controller, CONNECT_TIMEOUT_MS)
                     socket = s
                     out.clear()
-                    link.attach(connection)
+                    check(link.settings.connected && link.tryAttach(connection)) { "the link is down" }
                     val writer = Thread({ writeLoop(s) }, "${Thread.currentThread().name}-tx").apply { isDaemon = true; start() }
                     try {
                         val input = s.getInputStream()
@@ -53,7 +55,7 @@ internal class H4Uart(private val link: RobotLink, private val controller: InetS
                     }
                 }
             } catch (_: IOException) {
-            } catch (_: IllegalStateException) { // the link model has the link down: the wire is cut
+            } catch (_: IllegalStateException) { // the link model has the link down, or still drains the last wire's bytes
             }
             socket = null
             if (!closed) Thread.sleep(RETRY_MS)
