@@ -501,13 +501,14 @@ void hal_line_convert(void)
     ADCA.CTRLA = ADC_ENABLE_bm | ADC_CH0START_bm | ADC_CH1START_bm | ADC_CH2START_bm | ADC_CH3START_bm;
 }
 
-/* The sweep is done by then (hal.h: within 100 us); signed single-ended results 0..2047 as 12 bits. */
+/* A signed single-ended result 0..2047 as 12 bits. */
 static inline __attribute__((always_inline)) uint16_t line_result(int16_t r)
 {
     return r < 0 ? 0u : (uint16_t)(r << 1);
 }
 
-/* The four results in registers, not an array on the stack (a scheduler interrupt's work three times a tick). */
+/* The sweep is done by then (hal.h: within 100 us). The four results in registers, not an array on the stack (a
+ * scheduler interrupt's work three times a tick). */
 void hal_line_results(uint16_t out[HAL_LINE_DETECTORS])
 {
     uint8_t s = hal_irq_save(); /* the 16-bit reads share ADCA's TEMP register */
