@@ -95,7 +95,7 @@ class HostLinksTest {
     }
 
     @Test
-    fun `a take-over tells the old driver, whose commands are refused from then on`() = RealFirmware.emulator("straight").use { emu ->
+    fun `a take-over tells the old driver, whose commands are refused from then on`(): Unit = RealFirmware.emulator("straight").use { emu ->
         val robot = robot(emu)
         TestHost(robot, session = 0xAAA).use { panel ->
             TestHost(robot, session = 0xBBB, handshake = false).use { cli ->
