@@ -544,20 +544,30 @@ static void seat_take(uint8_t k, uint8_t change)
     announce(change);
 }
 
-/* Nobody drives now; a host that asked to drive and was waiting gets the drive. */
+/* \return the first link (but `except`) whose host asked to drive and waits for it, or COMM_NO_LINK. */
+static uint8_t waiting_host(uint8_t except)
+{
+    for (uint8_t k = 0; k < COMM_LINKS; k++)
+        if ((open_links & BIT(k)) && k != except && links[k].wants == PB_HOST_ROLE_DRIVE)
+            return k;
+    return COMM_NO_LINK;
+}
+
+/* Nobody drives now: the driver left on purpose (goodbye, or it asked to watch), so what it queued is the robot's to
+ * finish and the failsafe guards nothing; a host that asked to drive and was waiting gets the drive. */
 static void seat_free(uint8_t change)
 {
+    guarded = 0;
     seat.taken = 0;
     seat.link = COMM_NO_LINK;
     seat.expired = 0;
     seat.session = 0;
     memset(seat.label, 0, sizeof seat.label);
-    for (uint8_t k = 0; k < COMM_LINKS; k++)
-        if ((open_links & BIT(k)) && links[k].wants == PB_HOST_ROLE_DRIVE) {
-            seat_take(k, change);
-            return;
-        }
-    announce(change);
+    uint8_t next = waiting_host(COMM_NO_LINK);
+    if (next != COMM_NO_LINK)
+        seat_take(next, change);
+    else
+        announce(change);
 }
 
 /* A driver that has not been heard for the hold may lose the drive to a host that asks for it: marked here, at the
@@ -565,12 +575,10 @@ static void seat_free(uint8_t change)
  * stopped what the silent driver drove by then, whatever the steps of the clock). Nobody waiting, it keeps it. */
 static void seat_watch(void)
 {
-    if (seat.expired) {
-        for (uint8_t k = 0; k < COMM_LINKS; k++)
-            if ((open_links & BIT(k)) && k != seat.link && links[k].wants == PB_HOST_ROLE_DRIVE) {
-                seat_take(k, PB_DRIVER_CHANGE_LOST);
-                return;
-            }
+    uint8_t next = seat.expired ? waiting_host(seat.link) : COMM_NO_LINK;
+    if (next != COMM_NO_LINK) {
+        seat_take(next, PB_DRIVER_CHANGE_LOST);
+        return;
     }
     uint16_t hold = settings.link.failsafe_timeout_ms ? settings.link.failsafe_timeout_ms : COMM_DRIVER_HOLD_MS;
     if (robot_state.time.time_ms - seat.seen_ms >= hold)
@@ -582,10 +590,8 @@ static void seat_watch(void)
 static void leave(uint8_t k)
 {
     links[k].wants = PB_HOST_ROLE_WATCH;
-    if (seat.link == k) {
-        guarded = 0;
+    if (seat.link == k)
         seat_free(PB_DRIVER_CHANGE_LEFT);
-    }
 }
 
 /* ---- links ---- */

@@ -220,7 +220,7 @@ PB_STATIC_ASSERT(offsetof(pb_settings_identity_t, name) == 1, "pb_settings_ident
 
 /** State reflection: what the robot sends on its own, and how often. */
 typedef struct PB_PACKED {
-    uint8_t mode; /**< full, reduced or no state packets */
+    uint8_t mode; /**< none, full or reduced state packets */
     uint16_t period_ms; /**< period of state packets [ms] */
 } pb_settings_sync_t;
 PB_STATIC_ASSERT(sizeof(pb_settings_sync_t) == 3, "pb_settings_sync_t size");

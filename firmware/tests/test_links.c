@@ -229,6 +229,16 @@ static void goodbye_lets_the_queue_finish_or_drops_it(void)
           "both finished: %d %d", outcome_on(0, 1), outcome_on(0, 2));
     CHECK(world.x > 0.19 && world.x < 0.21, "0.2 m driven: %.3f", world.x);
 
+    /* A driver that asks to watch leaves its queue to the robot as a goodbye would: no failsafe. */
+    host_clear();
+    host_handshake(WORLD_SESSION, PB_HOST_ROLE_DRIVE, WORLD_LABEL);
+    move(0, 9, 9, 0.1f);
+    world_run_ms(20);
+    host_handshake(WORLD_SESSION, PB_HOST_ROLE_WATCH, WORLD_LABEL);
+    world_run_ms(3000);
+    host_collect();
+    CHECK(outcome_on(0, 9) == PB_MOVEMENT_OUTCOME_FINISHED, "finished: %d", outcome_on(0, 9));
+
     /* Teleoperation ends with its host; a dropped queue is a stop. */
     host_clear();
     host_handshake(WORLD_SESSION, PB_HOST_ROLE_DRIVE, WORLD_LABEL);

@@ -15,8 +15,10 @@ import com.github.ajalt.clikt.parameters.options.switch
 import com.github.ajalt.clikt.parameters.types.double
 import com.github.ajalt.clikt.parameters.types.int
 import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Job
 import kotlinx.coroutines.TimeoutCancellationException
 import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import org.pocketbot.emulator.cli.EmulatorCommand
 import org.pocketbot.sdk.CommandRefusedException
@@ -29,6 +31,7 @@ import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.ProtocolMismatchException
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.transport.EmulatorDiscoverer
 import org.pocketbot.sdk.transport.TransportLostException
@@ -80,8 +83,9 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
         serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found.
 
         Exit codes: 0 ok, 1 other failure, 2 usage (also an unknown setting or field), 3 no such robot,
-        4 refused by the robot, 5 link lost, 6 firmware version mismatch, 7 timeout, 8 driven by another host
-        (commands that change a robot need --take-over then; the others only watch it).
+        4 refused by the robot, 5 link lost (also a link that stays down for ${LINK_GRACE.inWholeSeconds} s: no command waits longer
+        for it), 6 firmware version mismatch, 7 timeout, 8 driven by another host (commands that change a robot need
+        --take-over then; the others only watch it).
 
         Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
     """.trimIndent()
@@ -119,6 +123,14 @@ fun run(args: Array<String>): Int {
     }
 }
 
+/** What happened to a robot while a command ran, on stderr: a script's output stays clean. */
+private fun tell(robot: Robot, event: RobotEvent) = when (event) {
+    is RobotEvent.Restarted ->
+        System.err.println("pocketbot: ${robot.identity.name} restarted: its clock went back from ${event.lastSeenTimeMs / 1000.0} s to ${event.timeMs / 1000.0} s")
+    is RobotEvent.DriverChanged ->
+        if (event.taken) System.err.println("pocketbot: ${robot.identity.name} was taken over by ${event.driving.driver}") else Unit
+}
+
 fun main(args: Array<String>) {
     exitProcess(run(args))
 }
@@ -127,7 +139,8 @@ fun main(args: Array<String>) {
  * Runs [block] with the robots a command names connected as [role], and says goodbye to them afterwards (the robot
  * does with what this command queued as [onLeave] says). With [mustDrive], a robot that another host drives fails
  * the command before anything is sent to any robot. Failures become a clear line on stderr and the documented exit
- * code.
+ * code. A robot whose link stays down for [LINK_GRACE] (or closes) ends the command with exit 5: the SDK would wait
+ * for the link without end, and a command must end.
  */
 fun robotCommand(
     globals: Globals, format: Format?, names: List<String>, all: Boolean, role: Role, mustDrive: Boolean, onLeave: QueueOnLeave,
@@ -138,6 +151,7 @@ fun robotCommand(
     val code = runBlocking {
         val progress = Progress()
         var robots = emptyList<Robot>()
+        var listening = emptyList<Job>()
         try {
             progress.show("looking for robots")
             // Robots named by name or address end the search once all are found; ids and --all need the whole scan;
@@ -146,10 +160,14 @@ fun robotCommand(
                 !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
             })
             robots = connectRobots(found, names, all, globals.options.copy(role = role), progress)
+            listening = robots.map { r -> launch { r.events.collect { tell(r, it) } } }
             if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
                 throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
             }
-            coroutineScope { block(robots, out) } // a failure of any robot's part surfaces as itself
+            coroutineScope { // a failure of any robot's part surfaces as itself
+                val watch = launch { throw linkGone(robots) }
+                try { block(robots, out) } finally { watch.cancel() }
+            }
             out.flush()
             Exit.OK
         } catch (e: CliktError) {
@@ -160,6 +178,7 @@ fun robotCommand(
             System.err.println("pocketbot: ${e.message ?: e}" + if (e is NotDriverException) " (use --take-over)" else "")
             Exit.of(e)
         } finally {
+            listening.forEach { it.cancel() }
             for (r in robots) r.disconnect(onLeave)
         }
     }

@@ -26,19 +26,24 @@ import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.withTimeoutOrNull
+import kotlinx.coroutines.CancellationException
 import org.pocketbot.protocol.ColourMode
+import org.pocketbot.protocol.LocoMode
 import org.pocketbot.protocol.DebugModule
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugSource
 import org.pocketbot.sdk.Movement
+import org.pocketbot.sdk.MovementHandle
 import org.pocketbot.sdk.MovementOutcome
+import org.pocketbot.sdk.MovementResult
+import org.pocketbot.sdk.Pose
 import org.pocketbot.sdk.QueueOnLeave
 import org.pocketbot.sdk.Role
+import org.pocketbot.sdk.WheelDistances
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.SettingField
-import org.pocketbot.sdk.StateFields
 import java.io.File
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -156,11 +161,11 @@ class SettingsCommand : CoreCliktCommand(name = "settings") {
 private fun field(robot: Robot, name: String): SettingField<*> =
     robot.settings[name] ?: throw IllegalArgumentException("no setting '$name' (see: pocketbot settings list)")
 
-/** The value as people read it: a binary32 setting without the digits its rounding adds (0.0004, not 3.9999999E-4). */
-private fun shown(f: SettingField<*>): Any? = (f.value as? Double)?.toFloat()?.toString()?.toDouble() ?: f.value
-
-private fun range(f: SettingField<*>): String = if (f.min != null && f.max != null) "${num(f.min!!)}..${num(f.max!!)}" else ""
-private fun num(d: Double): String = if (d == Math.rint(d)) d.toLong().toString() else d.toString()
+/**
+ * The value as people read it and scripts get it: a real number as the robot's binary32 float (printed as its
+ * shortest decimal, 0.0004, and a number in JSON), an enumeration by name, a list as a list.
+ */
+private fun shown(f: SettingField<*>): Any? = (f.value as? Double)?.toFloat() ?: f.value
 
 class SettingsList : RobotCommand("list", 0..1) {
     override fun help(context: Context) = "Every setting (or those of a GROUP) with value, unit, range and what it does.\n\nExample: pocketbot settings list PocketBot-1 line_pid"
@@ -171,7 +176,7 @@ class SettingsList : RobotCommand("list", 0..1) {
             val fields = r.settings.fields.filter { group == null || it.name.startsWith("$group.") || it.name == group }
             if (fields.isEmpty()) throw IllegalArgumentException("no settings group '$group'")
             for (f in fields) {
-                out.row(linkedMapOf("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to range(f), "doc" to f.doc)
+                out.row(linkedMapOf("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to f.rangeText, "doc" to f.doc)
                     .also { if (robots.size == 1) it.remove("robot") })
             }
         }
@@ -299,18 +304,21 @@ class StateCommand : DrivingCommand("state") {
     override fun help(context: Context) = """
         Prints the robot's state once, or with --watch every state the robot sends until stopped. It only watches the
         robot; --rate HZ asks it for that many full states a second (driving it to ask; while another host drives it,
-        its states come as that host chose them, unless --take-over). --fields picks fields or groups (wheels,
-        line.position, ...).
+        its states come as that host chose them, unless --take-over).
 
-        Example: pocketbot state PocketBot-1 --watch --rate 20 --fields time.time_ms,wheels --csv
+        By default a few values in people's units: robot time, locomotion mode, speed, line position, battery and the
+        pose (x, y, heading: dead reckoning from the encoders since this command connected). --fields picks state
+        fields or groups (wheels, line.position, ...), pose, or all.
+
+        Example: pocketbot state PocketBot-1 --watch --rate 20 --fields time.time_ms,wheels,pose --csv
     """.trimIndent()
 
     private val watch by option("--watch", help = "keep printing until Ctrl-C (or --seconds)").flag()
     private val rate by option("--rate", help = "full states per second while watching, 1..100 (the robot's own rate when not given)").int().restrictTo(1..100)
     private val seconds by option("--seconds", help = "stop watching after this many seconds").double()
-    private val fields by option("--fields", help = "comma-separated fields or groups").split(",")
+    private val fields by option("--fields", help = "comma-separated state fields or groups, pose, or all").split(",")
 
-    private val selected by lazy { StateFields.select(fields ?: StateFields.all.map { it.name }) }
+    private val selected by lazy { fields?.let(StateColumns::select) ?: StateColumns.readable }
 
     override fun role(): Role = if (rate != null) super.role() else Role.WATCH
     override fun mustDrive(): Boolean = false
@@ -321,7 +329,7 @@ class StateCommand : DrivingCommand("state") {
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         fun print(r: Robot, s: RobotState) = out.row(linkedMapOf<String, Any?>("robot" to r.identity.name).apply {
-            for (f in selected) put(f.name, f.of(s))
+            for (c in selected) put(c.name, c.of(r, s))
         })
         if (!watch) {
             // The mirror is all zero until the robot's first state: print what the robot reported, not that.
@@ -340,7 +348,7 @@ class StateCommand : DrivingCommand("state") {
             val printers = robots.map { r -> launch { r.stateUpdates.collect { print(r, it.state) } } }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}: ${gone.connection.value}")
+            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
         }
     }
 }
@@ -354,8 +362,9 @@ class ConsoleCommand : DrivingCommand("console") {
     override fun help(context: Context) = """
         Prints the robot's debug text, and the SDK's messages about its link, until stopped. It only watches the robot.
 
-        --level sets the robot's debug level first (1 errors, 2 info, 3 verbose, 4 trace), driving it to do so; while
-        another host drives it, the level stays as it is, unless --take-over.
+        --level sets the robot's debug level first (1 errors, 2 info, 3 verbose, 4 trace), driving it to do so and then
+        only watching (a host that waits to drive it gets it back); while another host drives it, the level stays as
+        it is, unless --take-over.
 
         Example: pocketbot console PocketBot-1 --level 3
     """.trimIndent()
@@ -369,8 +378,10 @@ class ConsoleCommand : DrivingCommand("console") {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         level?.let { l ->
             onEach(robots) { r ->
-                if (r.driving.value.byThisHost) r.settings.debug.level.set(l)
-                else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
+                if (r.driving.value.byThisHost) {
+                    r.settings.debug.level.set(l)
+                    r.setRole(Role.WATCH) // reading the console needs no drive: the robot is free for other hosts
+                } else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
             }
         }
         out.stream(linkedMapOf(
@@ -383,7 +394,7 @@ class ConsoleCommand : DrivingCommand("console") {
             }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}")
+            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
         }
     }
 }
@@ -391,7 +402,11 @@ class ConsoleCommand : DrivingCommand("console") {
 class MoveCommand : DrivingCommand("move", 2..3) {
     override fun help(context: Context) = """
         Queues a movement: 'straight DISTANCE_M', 'rotate ANGLE_DEG' or 'arc RADIUS_M ANGLE_DEG', at --speed m/s.
-        With --wait, returns when it ended and prints how (exit 0 only when it finished; 5 when the link failed it).
+        It ends line following or the track behaviour if the robot runs one (and says so).
+
+        With --wait, returns when it ended and prints how and how much of it was done (exit 0 only when it finished;
+        5 when the link failed it). A link that stays down for ${LINK_GRACE.inWholeSeconds} s ends the wait: the movement is
+        then 'lost', with what this host saw the robot do before (the robot's failsafe stops it on its own).
         Without it, pocketbot leaves at once, saying goodbye: the robot finishes the movement (--on-leave drop: it
         drops it). A pocketbot killed before its goodbye leaves the robot to its link failsafe, which stops it.
 
@@ -424,26 +439,59 @@ class MoveCommand : DrivingCommand("move", 2..3) {
     override fun check() { movement }
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
-        val results = robots.map { r ->
-            async {
-                val handle = r.locomotion.enqueue(movement)
-                if (!wait) {
-                    out.row("robot" to r.identity.name, "id" to handle.id, "movement" to movement.toString(), "status" to "queued",
-                        "on_leave" to if (leave == QueueOnLeave.FINISH) "the robot finishes it" else "the robot drops it")
-                    null
-                } else {
-                    val result = handle.await()
-                    out.row("robot" to r.identity.name, "id" to handle.id, "movement" to movement.toString(), "outcome" to result.outcome,
-                        "done" to result.done?.toFloat()?.toString()?.toDouble(), "unit" to movement.unit) // as the robot's float says it
-                    result.outcome
-                }
+        val moves = robots.map { r -> async { start(r) } }.awaitAll()
+        if (!wait) {
+            for (m in moves) {
+                out.row("robot" to m.robot.identity.name, "id" to m.handle.id, "movement" to movement.toString(), "status" to "queued",
+                    "on_leave" to if (leave == QueueOnLeave.FINISH) "the robot finishes it" else "the robot drops it")
             }
-        }.awaitAll()
+            return
+        }
+        val results = try {
+            moves.map { m -> async { m.handle.await().also { out.row(m.row(it)) } } }.awaitAll()
+        } catch (e: CancellationException) {
+            // A link stayed down (the command ends with exit 5): each movement still open, as far as this host saw it.
+            for (m in moves) if (!m.handle.isDone) out.row(m.row(null))
+            throw e
+        }
         out.flush()
         when {
-            results.any { it == MovementOutcome.FAILSAFE || it == MovementOutcome.LOST } -> throw ProgramResult(Exit.LINK_LOST)
-            results.any { it != null && it != MovementOutcome.FINISHED } -> throw ProgramResult(Exit.FAILED)
+            results.any { it.outcome == MovementOutcome.FAILSAFE || it.outcome == MovementOutcome.LOST } -> throw ProgramResult(Exit.LINK_LOST)
+            results.any { it.outcome != MovementOutcome.FINISHED } -> throw ProgramResult(Exit.FAILED)
         }
+    }
+
+    /** Queues the movement on [r], saying so when that ends the line following or track behaviour the robot ran. */
+    private suspend fun start(r: Robot): Started {
+        val mode = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }?.locomotion?.mode
+        val handle = r.locomotion.enqueue(movement)
+        val from = r.odometry.pose.value to r.odometry.wheelDistances.value
+        when (mode) {
+            LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.identity.name} was following the line: the movement ended that")
+            LocoMode.TRACK -> System.err.println("pocketbot: ${r.identity.name} ran the track behaviour: the movement ended that")
+            else -> {}
+        }
+        return Started(r, handle, from.first, from.second)
+    }
+
+    /** A movement the robot took, and where its odometry stood then. */
+    private inner class Started(val robot: Robot, val handle: MovementHandle, val pose: Pose, val wheels: WheelDistances) {
+        /**
+         * How much of it this host saw the robot do, from the odometry since the robot took it: metres for a straight,
+         * degrees for a rotation or an arc. For a movement whose end is not known (its robot was lost).
+         */
+        fun seen(): Double = when (movement) {
+            is Movement.Straight -> robot.odometry.wheelDistances.value.let { (it.leftM + it.rightM - wheels.leftM - wheels.rightM) / 2 }
+            else -> Math.toDegrees(robot.odometry.pose.value.headingRad - pose.headingRad)
+        }.let { kotlin.math.round(it * 1000) / 1000 }
+
+        /** Its row: how it ended, or with [result] null `lost` and what [seen] says. */
+        fun row(result: MovementResult?): Map<String, Any?> = linkedMapOf(
+            "robot" to robot.identity.name, "id" to handle.id, "movement" to movement.toString(),
+            "outcome" to (result?.outcome ?: MovementOutcome.LOST),
+            // The robot's own figure is a float: as it says it. Without one, what this host saw.
+            "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit,
+        )
     }
 }
 

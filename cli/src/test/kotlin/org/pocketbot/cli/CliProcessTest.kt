@@ -19,6 +19,7 @@ import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.StateFields
 import org.pocketbot.sdk.connect
 import java.io.File
 import java.nio.ByteBuffer
@@ -115,6 +116,7 @@ class CliProcessTest {
         val refused = pocketbot("settings", "set", "PocketBot-1", "speed_pid.kd", "-3")
         assertEquals(4, refused.code, "$refused")
         assertTrue(refused.err.contains("outside the range"), "$refused")
+        assertTrue(!refused.err.contains("settings_value") && !refused.err.contains("update_settings"), "no internal names: $refused")
         assertEquals(0.5f, robotFloat("speed_pid.kd", 1), "a refused value changes nothing")
 
         val unknown = pocketbot("settings", "set", "PocketBot-1", "speed_pid.nope", "1")
@@ -137,6 +139,46 @@ class CliProcessTest {
         assertEquals(0, everywhere.code, "$everywhere")
         assertEquals(2, jsonLines(everywhere.out).size, "$everywhere")
         assertEquals(0.25f to 0.25f, robotFloat("wheel_pid.kd", 1) to robotFloat("wheel_pid.kd", 2), "both robots hold the value")
+    }
+
+    @Test
+    fun floatSettingsReadAsTheShortestDecimalAndEnumSettingsByName() {
+        val set = pocketbot("settings", "set", "PocketBot-2", "line_pid.kp", "0.0004")
+        assertEquals(0, set.code, "$set")
+        assertTrue(Regex("""line_pid\.kp +0\.0004 +acknowledged""").containsMatchIn(set.out), "the echo reads as typed: $set")
+        val get = pocketbot("settings", "get", "PocketBot-2", "line_pid.kp")
+        assertTrue(Regex("""line_pid\.kp +0\.0004( |$)""", RegexOption.MULTILINE).containsMatchIn(get.out), "$get")
+        val json = pocketbot("settings", "get", "PocketBot-2", "line_pid.kp", "--json")
+        assertTrue(json.out.contains("\"value\":0.0004"), "JSON keeps a number, the float's shortest decimal: $json")
+        val export = pocketbot("settings", "export", "PocketBot-2")
+        assertTrue(Regex(""""kp": 0\.0004[,\n]""").containsMatchIn(export.out), export.out)
+        assertTrue(!Regex("""\d[eE]-?\d""").containsMatchIn(set.out + get.out + export.out), "no scientific notation for people")
+        assertTrue(Regex(""""accel_mps2": \d+(\.\d{1,4})?,""").containsMatchIn(export.out), "no float noise (0.15000000596...): $export")
+
+        val list = pocketbot("settings", "list", "PocketBot-2", "sync")
+        val mode = list.out.lines().single { it.startsWith("sync.mode") }
+        assertTrue(Regex("""sync\.mode +full +none, full, reduced """).containsMatchIn(mode), "an enum setting lists its names, not 0..2: $mode")
+        val reduced = pocketbot("settings", "set", "PocketBot-2", "sync.mode", "reduced")
+        assertEquals(0, reduced.code, "$reduced")
+        assertTrue(Regex("""sync\.mode +reduced +acknowledged""").containsMatchIn(reduced.out), "$reduced")
+        assertTrue(Regex(""""mode": "full"""").containsMatchIn(export.out), "the export names the mode: $export")
+        val number = pocketbot("settings", "set", "PocketBot-2", "sync.mode", "7")
+        assertEquals(2, number.code, "$number")
+        assertTrue(number.err.contains("none, full, reduced"), "$number")
+    }
+
+    @Test
+    fun stateOnceReadsAsAFewColumnsWithThePose() {
+        val run = pocketbot("state", "PocketBot-1")
+        assertEquals(0, run.code, "$run")
+        val (header, row) = run.out.lines().filter { it.isNotBlank() }
+        assertEquals(listOf("ROBOT", "TIME_S", "MODE", "SPEED_MPS", "LINE", "BATTERY_V", "X_M", "Y_M", "HEADING_DEG"), header.split(Regex(" +")), run.out)
+        assertTrue(row.length < 120, "one short line: $row")
+        val all = pocketbot("state", "PocketBot-1", "--fields", "all", "--json")
+        val fields = jsonLines(all.out).single().keys
+        assertEquals(listOf("robot") + StateFields.all.map { it.name } + listOf("pose.x_m", "pose.y_m", "pose.heading_deg"), fields.toList())
+        val pose = pocketbot("state", "PocketBot-1", "--fields", "pose,time", "--csv")
+        assertEquals("robot,pose.x_m,pose.y_m,pose.heading_deg,time.time_ms,time.tick_max_us,time.overruns,time.last_overrun_ms", pose.out.lines().first(), "$pose")
     }
 
     @Test

@@ -1,7 +1,6 @@
 package org.pocketbot.emulator
 
 import org.pocketbot.emulator.link.NoFreeLinkException
-import org.pocketbot.protocol.Ack
 import org.pocketbot.protocol.Driver
 import org.pocketbot.protocol.DriverChange
 import org.pocketbot.protocol.Error
@@ -109,7 +108,7 @@ class HostLinksTest {
                 assertEquals(ErrorCode.NOT_DRIVER.code, panel.all<Error>().single { it.seq == seq }.code)
                 val moved = cli.send(MoveStraight(10, 0.01f, 0.1f))
                 cli.run(20.milliseconds)
-                assertIs<Ack>(cli.ackOf(moved))
+                assertTrue(cli.ackOf(moved) != null, "the new driver's command runs")
             }
         }
     }

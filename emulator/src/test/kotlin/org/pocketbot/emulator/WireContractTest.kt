@@ -7,9 +7,11 @@ import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.Error as ErrorPacket
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.Goodbye
 import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.HelloRequest
 import org.pocketbot.protocol.HostRole
+import org.pocketbot.protocol.LeaveQueue
 import org.pocketbot.protocol.LoadDefaults
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveStraight
@@ -108,9 +110,12 @@ class WireContractTest {
         val frames = (1..5).map { Frames.encode(MoveStraight(it, 0.01f, 0.1f), it) }
         for (session in listOf(0xAAAAL, 0xBBBBL)) {
             TestHost(robot, session = session).use { host ->
-                host.hello(role = HostRole.TAKE_OVER) // the one before left without a goodbye: it still has the drive
+                host.hello()
                 frames.forEach { host.sendFrame(it) }
                 assertTrue(host.runUntil(200.milliseconds) { (1..5).all { host.ackOf(it) != null } }, "acks in session $session")
+                // It leaves the robot to finish its queue (without the goodbye, the failsafe would end it).
+                host.send(Goodbye(LeaveQueue.FINISH.code))
+                host.run(20.milliseconds)
             }
         }
         TestHost(robot, session = 0xCCCCL).use { host ->

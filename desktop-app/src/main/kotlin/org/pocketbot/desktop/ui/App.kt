@@ -52,10 +52,9 @@ fun PanelApp(model: PanelModel, view: MutableState<View> = remember { mutableSta
                                 modifier = Modifier.testTag("tab-${v.name}"))
                         }
                     }
-                    val chosen by model.selected.collectAsState()
-                    chosen?.let { WatchingBanner(it) }
+                    val selected by model.selected.collectAsState()
+                    selected?.let { WatchingBanner(it) }
                     Box(Modifier.weight(1f).fillMaxWidth().padding(12.dp)) {
-                        val selected by model.selected.collectAsState()
                         when (view.value) {
                             View.OVERVIEW -> OverviewView(model)
                             View.WORLD -> WorldView(model)

@@ -36,7 +36,7 @@ public open class CommandRefusedException internal constructor(
     public val command: String,
     public val code: ErrorCode,
     public val detail: Int,
-    message: String = "robot refused $command: ${code.name.lowercase()} (detail $detail)",
+    message: String = "robot refused ${command.replace('_', ' ')}: ${describe(code, detail)}",
 ) : RobotException(message) {
     internal constructor(packetType: Int, rawCode: Int, detail: Int) :
         this(commandName(packetType), errorCodeOf(rawCode), detail)
@@ -67,10 +67,14 @@ public class SettingRefusedException internal constructor(
     public val value: Any?,
     code: ErrorCode,
     detail: Int,
+    /** [value] as people read it ([SettingField.format]). */
+    valueText: String = value.toString(),
+    /** What the robot accepts, as people read it ([SettingField.rangeText]); empty when unbounded. */
+    range: String = "",
 ) : CommandRefusedException(
     "update_settings", code, detail,
-    "robot refused setting $name = $value: ${code.name.lowercase()}" +
-        if (code == ErrorCode.SETTINGS_VALUE) " (outside the range the robot accepts)" else " (detail $detail)",
+    "robot refused $name = $valueText: " +
+        if (code == ErrorCode.SETTINGS_VALUE) "outside the range it accepts" + (if (range.isEmpty()) "" else " ($range)") else describe(code, detail),
 )
 
 /** A command was sent [attempts] times on a live link and never acknowledged. */
@@ -102,3 +106,17 @@ public class ConnectFailedException internal constructor(message: String, cause:
 internal fun commandName(packetType: Int): String = PACKET_SPECS[packetType]?.name ?: "packet 0x${packetType.toString(16)}"
 
 internal fun errorCodeOf(raw: Int): ErrorCode = ErrorCode.fromCode(raw)
+
+/** What the robot objected to, in words (the protocol's names of [ErrorCode] are for programs). */
+internal fun describe(code: ErrorCode, detail: Int): String = when (code) {
+    ErrorCode.SETTINGS_RANGE -> "not a whole setting (offset $detail)"
+    ErrorCode.SETTINGS_VALUE -> "a value outside the range it accepts"
+    ErrorCode.QUEUE_FULL -> "its movement queue is full"
+    ErrorCode.BAD_ARGUMENT -> "an argument it does not accept (at byte $detail of the command)"
+    ErrorCode.BUSY -> "it is busy with something that cannot wait"
+    ErrorCode.BAD_SEQUENCE -> "a command out of sequence"
+    ErrorCode.BAD_LENGTH, ErrorCode.TOO_SHORT, ErrorCode.TOO_LONG -> "a command of the wrong length"
+    ErrorCode.BAD_CRC, ErrorCode.FRAMING -> "a damaged frame"
+    ErrorCode.UNKNOWN_TYPE -> "a command it does not know"
+    else -> "error code ${code.code} (detail $detail)"
+}

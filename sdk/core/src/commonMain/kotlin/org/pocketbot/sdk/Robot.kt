@@ -219,8 +219,25 @@ public class Robot internal constructor(
     /** The track behaviour of thesis A.3, run by the robot's firmware: start, stop, reverse, speed, token. */
     public val track: TrackBehaviour = TrackBehaviour(link, settings)
 
+    private val freshnessWatch = FreshnessWatch(link, reflector)
+
+    /**
+     * How current [state] is: live, or stale and why (the link is down, the sync mode does not carry the values, the
+     * robot went quiet) and since when, for the values of full states ([StateFreshness.full]) and those reduced states
+     * carry too ([StateFreshness.reduced]). It changes when that changes, not with every state. A face greys what is
+     * not live and shows its age:
+     *
+     * ```
+     * val f = robot.freshness.value.full
+     * val battery = "%.2f V".format(robot.state.value.power.batteryMv / 1000.0) +
+     *     if (f.isLive) "" else " (${f.age()?.inWholeSeconds} s ago)"
+     * ```
+     */
+    public val freshness: StateFlow<StateFreshness> get() = freshnessWatch.freshness
+
     init {
         link.client = Client()
+        freshnessWatch.start(link.connection)
     }
 
     /** What the link hands over, on its serial context: the path frame -> packet -> state -> flow ends here. */
@@ -268,6 +285,7 @@ public class Robot internal constructor(
 
     private fun applyState(state: RobotState, kind: StateUpdate.Kind) {
         _state.value = state
+        freshnessWatch.heard(kind == StateUpdate.Kind.FULL, state.time.timeMs)
         lineSensor.update(state.line)
         motors.update(state.wheels)
         odometry.update(state.encoders, state.time.timeMs)

@@ -585,7 +585,7 @@ public class SettingsIdentity(
 
 /** State reflection: what the robot sends on its own, and how often. */
 public class SettingsSync(
-    /** full, reduced or no state packets (see [SyncMode]) */
+    /** none, full or reduced state packets (see [SyncMode]) */
     public val mode: Int,
     /** period of state packets, in ms */
     public val periodMs: Int,
@@ -2870,7 +2870,7 @@ public class SettingsFieldInfo(
 public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
     SettingsFieldInfo("identity.robot_id", 0, FieldType.U8, 1, 1.0, 254.0, "", "unique id, also sent in IR messages"),
     SettingsFieldInfo("identity.name", 1, FieldType.CHAR, 16, null, null, "", "user-friendly name"),
-    SettingsFieldInfo("sync.mode", 17, FieldType.U8, 1, 0.0, 2.0, "", "full, reduced or no state packets"),
+    SettingsFieldInfo("sync.mode", 17, FieldType.U8, 1, 0.0, 2.0, "", "none, full or reduced state packets"),
     SettingsFieldInfo("sync.period_ms", 18, FieldType.U16, 1, 1.0, 60000.0, "ms", "period of state packets"),
     SettingsFieldInfo("scheduler.main_period_us", 20, FieldType.U16, 1, 500.0, 20000.0, "us", "period of the main loop tick"),
     SettingsFieldInfo("speed_pid.kp", 22, FieldType.F32, 1, 0.0, 100000.0, "", "proportional gain"),

@@ -143,7 +143,9 @@ internal class Link(
         } catch (e: CancellationException) {
             throw e
         } catch (e: Throwable) {
-            throw ConnectFailedException("cannot connect to ${device.name} at ${device.address}: ${e.message}", e)
+            // Transports begin their messages with the address: say it once.
+            val where = if (device.name == device.address) device.address else "${device.name} at ${device.address}"
+            throw ConnectFailedException("cannot connect to $where: ${e.message?.removePrefix("${device.address}: ")}", e)
         }
         scope.launch { supervise(session) }
     }
