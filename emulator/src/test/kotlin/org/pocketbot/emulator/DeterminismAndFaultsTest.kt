@@ -79,10 +79,13 @@ class DeterminismAndFaultsTest {
         val robot = emu.addRobot()
         TestHost(robot).use { host ->
             emu.runFor(50.milliseconds)
-            repeat(50) { host.send(SetSync(SyncMode.NONE.code, 100)); emu.runFor(5.milliseconds) }
+            val sent = List(50) { host.send(SetSync(SyncMode.NONE.code, 100)).also { emu.runFor(5.milliseconds) } }
             emu.runFor(100.milliseconds)
             host.drain()
-            assertEquals(50, host.packets.count { it is Ack })
+            // Every set_sync acknowledged once, and nothing else twice (the handshake's set_role has its own ack).
+            val acked = host.received.filter { it.second is Ack }.map { it.first }
+            assertEquals(sent, acked.filter { it in sent })
+            assertEquals(acked.distinct(), acked)
             assertEquals(0, robot.state().errors.crc)
         }
     }
