@@ -79,12 +79,12 @@ class DeterminismAndFaultsTest {
         val robot = emu.addRobot()
         TestHost(robot).use { host ->
             emu.runFor(50.milliseconds)
-            val sent = List(50) { host.send(SetSync(SyncMode.NONE.code, 100)).also { emu.runFor(5.milliseconds) } }
+            val seqs = List(50) { host.send(SetSync(SyncMode.NONE.code, 100)).also { emu.runFor(5.milliseconds) } }
             emu.runFor(100.milliseconds)
             host.drain()
-            // Every set_sync acknowledged once, and nothing else twice (the handshake's set_role has its own ack).
+            // Each command acknowledged exactly once (the handshake's set_role has an ack of its own).
             val acked = host.received.filter { it.second is Ack }.map { it.first }
-            assertEquals(sent, acked.filter { it in sent })
+            assertEquals(seqs, acked.filter { it in seqs })
             assertEquals(acked.distinct(), acked)
             assertEquals(0, robot.state().errors.crc)
         }
