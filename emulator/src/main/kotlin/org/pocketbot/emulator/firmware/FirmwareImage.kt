@@ -51,6 +51,7 @@ public class FirmwareImage internal constructor(
 
     public companion object {
         private const val COMPILED_CLASS = "org.pocketbot.emulator.firmware.FirmwareModule"
+        private const val COMPILED_HCI_CLASS = "org.pocketbot.emulator.firmware.HciFirmwareModule"
 
         /**
          * The firmware compiled to JVM bytecode at build time (chicory-compiler-maven-plugin, from
@@ -61,18 +62,28 @@ public class FirmwareImage internal constructor(
          * `-XX:-DontCompileHugeMethods`: HotSpot then never compiles the firmware's largest functions, and the
          * emulator runs at about half its speed (emulator/README.md, "Performance").
          */
-        public fun compiled(): FirmwareImage {
+        public fun compiled(): FirmwareImage = compiled(COMPILED_CLASS, "pocketbot.wasm")
+
+        /**
+         * The HCI build of the firmware (firmware/build/wasm/pocketbot-hci.wasm, compiled at build time like
+         * [compiled]): its UART carries H4 to a Bluetooth controller and hosts reach it over Bluetooth
+         * (see [org.pocketbot.emulator.RobotHandle.attachH4]). Throws [IllegalStateException] when the emulator was
+         * built without it.
+         */
+        public fun compiledHci(): FirmwareImage = compiled(COMPILED_HCI_CLASS, "pocketbot-hci.wasm")
+
+        private fun compiled(className: String, wasm: String): FirmwareImage {
             hugeMethodsChecked
             val cls = try {
-                Class.forName(COMPILED_CLASS)
+                Class.forName(className)
             } catch (e: ClassNotFoundException) {
                 throw IllegalStateException(
-                    "the emulator was built without the firmware: run `make -C firmware wasm`, then rebuild the emulator", e,
+                    "the emulator was built without firmware/build/wasm/$wasm: run `make -C firmware wasm`, then rebuild the emulator", e,
                 )
             }
             val module = cls.getMethod("load").invoke(null) as WasmModule
             val create = cls.getMethod("create", Instance::class.java)
-            return FirmwareImage(module, Function { instance -> create.invoke(null, instance) as Machine }, "compiled:$COMPILED_CLASS")
+            return FirmwareImage(module, Function { instance -> create.invoke(null, instance) as Machine }, "compiled:$className")
         }
 
         /** Warns once per JVM if huge methods stay interpreted (see [compiled]). */
