@@ -1,5 +1,12 @@
 package org.pocketbot.bench
 
+import io.ktor.network.selector.SelectorManager
+import io.ktor.network.sockets.Socket
+import io.ktor.network.sockets.aSocket
+import io.ktor.network.sockets.openReadChannel
+import io.ktor.network.sockets.openWriteChannel
+import io.ktor.utils.io.readAvailable
+import io.ktor.utils.io.writeFully
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.SupervisorJob
@@ -9,8 +16,10 @@ import kotlinx.coroutines.channels.ReceiveChannel
 import kotlinx.coroutines.delay
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeout
 import org.pocketbot.protocol.Ack
 import org.pocketbot.protocol.Crc16
+import org.pocketbot.protocol.Driver
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.Hello
@@ -21,6 +30,7 @@ import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.ReadMovements
 import org.pocketbot.protocol.ReadSettings
 import org.pocketbot.protocol.SETTINGS_DEFAULTS
+import org.pocketbot.protocol.SetRole
 import org.pocketbot.protocol.SetSync
 import org.pocketbot.protocol.SettingsData
 import org.pocketbot.protocol.Slip
@@ -30,7 +40,9 @@ import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.transport.ByteStream
 import org.pocketbot.sdk.transport.RobotDevice
+import org.pocketbot.sdk.transport.SlipStreamTransport
 import org.pocketbot.sdk.transport.TcpRobotDevice
 import org.pocketbot.sdk.transport.Transport
 import java.lang.management.ManagementFactory
@@ -45,7 +57,8 @@ import kotlin.time.Duration.Companion.milliseconds
 
 /**
  * Fleet scale of the host: one JVM mirrors N robots that each send a full state 100 times a second, over TCP (real
- * loopback sockets and the SDK's TcpTransport) and in process (a transport that hands over frames). The robots are
+ * loopback sockets and the SDK's TcpTransport), over TCP on ktor-network's sockets instead (the alternative the SDK's
+ * own socket loop is measured against) and in process (a transport that hands over frames). The robots are
  * stand-ins that answer the handshake and then stream pre-encoded state frames from one ticker thread, so nearly all
  * the CPU the process spends is the SDK's: the robots' own threads are measured and taken off. Latency runs from the
  * moment a state frame is handed to the socket (or the transport's channel) to the collector of
@@ -62,7 +75,7 @@ internal object FleetBench {
      * behind (counted in the histogram's last bucket, 100 ms and more, so they push p99 up instead of vanishing).
      */
     class Result(
-        val n: Int, val transport: String, val cores: Double, val usPerUpdate: Double, val p99Ms: Double, val updates: Long,
+        val n: Int, val transport: Link, val cores: Double, val usPerUpdate: Double, val p99Ms: Double, val updates: Long,
         val timed: Long, val late: Long,
     )
 
@@ -81,6 +94,8 @@ internal object FleetBench {
                     }
                     if (p is ReadMovements) out(Frames.encode(MovementLog(0, 0, 0, List(16) { 0 }, List(16) { 0 }, List(16) { 0f }), 0))
                     if (p is SetSync) streaming = p.mode != 0
+                    // A robot no other host drives: this host drives when it asks to.
+                    if (p is SetRole) out(Frames.encode(Driver(if (p.role == 0) 0 else 1, 1, p.label, 0), 0))
                     out(Frames.encode(Ack(p.type), r.seq))
                 }
             }
@@ -153,7 +168,23 @@ internal object FleetBench {
         }
     }
 
-    fun run(n: Int, tcp: Boolean, seconds: Int): Result = runBlocking {
+    /** How the host reaches the stand-ins. */
+    enum class Link(val label: String) {
+        /** The SDK's [TcpRobotDevice]: its socket loop reads, and the robot's link runs there too. */
+        TCP("tcp"),
+
+        /**
+         * The same SLIP transport on ktor-network's sockets (`SelectorManager(Dispatchers.IO)`, as ktor is meant to
+         * be used): its selector wakes a reader on `Dispatchers.IO`, which hands the bytes to the robot's link.
+         */
+        TCP_KTOR("tcp-ktor"),
+
+        /** Frames handed over in process: the SDK without any socket. */
+        IN_PROCESS("in-process"),
+    }
+
+    fun run(n: Int, link: Link, seconds: Int): Result = runBlocking {
+        val tcp = link != Link.IN_PROCESS
         val responders = List(n) { Responder(it) }
         val stamps = Stamps(n)
         val histogram = Histogram()
@@ -167,7 +198,11 @@ internal object FleetBench {
         var server: TcpRobots? = null
         if (tcp) {
             server = TcpRobots(responders, sinks).also { robotThreads += it.thread }
-            devices = List(n) { TcpRobotDevice("127.0.0.1", server.port(it), "stand-in-$it") }
+            devices = if (link == Link.TCP) {
+                List(n) { TcpRobotDevice("127.0.0.1", server.port(it), "stand-in-$it") }
+            } else {
+                List(n) { KtorTcpDevice("127.0.0.1", server.port(it), "stand-in-$it", ktorSelector) }
+            }
         } else {
             devices = List(n) { i -> InProcessStandIn(responders[i]) { sinks[i] = it } }
         }
@@ -220,9 +255,49 @@ internal object FleetBench {
         scope.cancel()
         repeat(late.get().coerceAtMost(Int.MAX_VALUE.toLong()).toInt()) { histogram.add(Long.MAX_VALUE / 2) }
         Result(
-            n, if (tcp) "tcp" else "in-process", cpu.toDouble() / wall, cpu / 1000.0 / updates.coerceAtLeast(1),
+            n, link, cpu.toDouble() / wall, cpu / 1000.0 / updates.coerceAtLeast(1),
             histogram.percentileMs(0.99), updates, histogram.count.get() - late.get(), late.get(),
         )
+    }
+
+    /** ktor's selector for [Link.TCP_KTOR], on its IO dispatcher as ktor's own clients and servers use it. */
+    private val ktorSelector by lazy { SelectorManager(Dispatchers.IO) }
+
+    /** A stand-in reached through ktor-network's sockets, framed by the SDK's [SlipStreamTransport] as TCP robots are. */
+    private class KtorTcpDevice(
+        private val host: String, private val port: Int, override val name: String, private val selector: SelectorManager,
+    ) : RobotDevice {
+        override val address: String get() = "tcp://$host:$port"
+        override suspend fun open(): Transport {
+            val socket = withTimeout(5000) {
+                aSocket(selector).tcp().connect(host, port) {
+                    noDelay = true
+                    keepAlive = true
+                }
+            }
+            return SlipStreamTransport(address, KtorStream(socket), Dispatchers.Unconfined)
+        }
+    }
+
+    private class KtorStream(private val socket: Socket) : ByteStream {
+        private val input = socket.openReadChannel()
+        private val output = socket.openWriteChannel(autoFlush = false)
+
+        override suspend fun read(buffer: ByteArray, offset: Int, length: Int): Int {
+            while (true) {
+                val n = input.readAvailable(buffer, offset, length)
+                if (n != 0) return n
+            }
+        }
+
+        override suspend fun write(bytes: ByteArray) {
+            output.writeFully(bytes, 0, bytes.size)
+            output.flush()
+        }
+
+        override fun close() {
+            socket.close()
+        }
     }
 
     /** A robot in process: frames go straight into the host's incoming channel. */

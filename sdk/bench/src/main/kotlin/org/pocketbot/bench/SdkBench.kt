@@ -34,41 +34,58 @@ fun main(args: Array<String>) {
     if ("connect" in which) connect()
     if ("realtime" in which) realtime()
     if ("fleet" in which) fleet()
-    // One fleet run, for profiling: fleet-tcp-<n> or fleet-inprocess-<n>.
+    // One fleet run, for profiling (under JFR): fleet-tcp-<n>, fleet-tcp-ktor-<n> or fleet-in-process-<n>.
     which.firstOrNull { it.startsWith("fleet-") }?.let { arg ->
-        val (_, kind, n) = arg.split('-')
-        val r = FleetBench.run(n.toInt(), tcp = kind == "tcp", seconds = 10)
-        line("fleet_run", "${r.transport} n=${r.n} cores=${"%.2f".format(r.cores)} us_per_update=${"%.2f".format(r.usPerUpdate)} p99_ms=${"%.2f".format(r.p99Ms)}")
+        val label = arg.removePrefix("fleet-").substringBeforeLast('-')
+        val link = FleetBench.Link.entries.first { it.label == label }
+        val r = FleetBench.run(arg.substringAfterLast('-').toInt(), link, seconds = 10)
+        report(r)
     }
 }
 
 /**
- * Fleet scale (FleetBench): N robots at 100 Hz full state each, over TCP and in process. The largest N whose SDK
- * work fits in one core (process CPU without the stand-in robots' threads <= 1 core) with p99 latency <= 5 ms.
+ * Fleet scale (FleetBench): [FLEET] robots at 100 Hz full state each over TCP on the SDK's socket loop, over TCP on
+ * ktor-network's sockets, and in process, interleaved in [FLEET_ROUNDS] rounds so that the three meet the same load
+ * (the machine is shared: compare within a round). Robots per core: the fleet over the cores the SDK spent on it
+ * (the process's CPU without the stand-in robots' threads), and 0 when its p99 latency is over 5 ms. Each metric is
+ * printed as the median of the rounds and their range, beside the load average before and after.
  */
 private fun fleet() {
-    val sizes = listOf(100, 250, 500, 1000, 1500, 2000)
-    for (tcp in listOf(true, false)) {
-        var fits = 0
-        var at1000: FleetBench.Result? = null
-        for (n in sizes) {
-            val r = FleetBench.run(n, tcp, seconds = 5)
-            report(r)
-            if (n == 1000) at1000 = r
-            if (r.cores <= 1.0 && r.p99Ms <= 5.0) fits = n else break
+    line("fleet_load_average_before", loadAverage())
+    val rounds = List(FLEET_ROUNDS) { FleetBench.Link.entries.associateWith { FleetBench.run(FLEET, it, seconds = 5).also(::report) } }
+    line("fleet_load_average_after", loadAverage())
+    for (link in FleetBench.Link.entries) {
+        val suffix = when (link) {
+            FleetBench.Link.TCP -> ""
+            FleetBench.Link.TCP_KTOR -> "_ktor"
+            FleetBench.Link.IN_PROCESS -> "_in_process"
         }
-        // The cost and the tail at 1000 robots are printed whether or not a smaller fleet already missed the goal.
-        val r1000 = at1000 ?: FleetBench.run(1000, tcp, seconds = 5).also(::report)
-        val suffix = if (tcp) "" else "_in_process"
-        line("fleet_robots_per_core$suffix", fits.toString())
-        line("fleet_us_per_update$suffix", "%.2f".format(r1000.usPerUpdate))
-        line("fleet_p99_ms$suffix", "%.2f".format(r1000.p99Ms))
-        line("fleet_timed_share$suffix", "%.1f%%".format(100.0 * r1000.timed / r1000.updates.coerceAtLeast(1)))
+        val rs = rounds.map { it.getValue(link) }
+        line("fleet_robots_per_core$suffix", spread(rs.map { if (it.p99Ms <= 5.0) it.n / it.cores else 0.0 }, "%.0f"))
+        line("fleet_us_per_update$suffix", spread(rs.map { it.usPerUpdate }, "%.2f"))
+        line("fleet_p99_ms$suffix", spread(rs.map { it.p99Ms }, "%.2f"))
+        line("fleet_timed_share$suffix", spread(rs.map { 100.0 * it.timed / it.updates.coerceAtLeast(1) }, "%.1f%%"))
     }
+    // What ktor's sockets cost per update against the SDK's loop, round by round.
+    line("fleet_ktor_cost_ratio", spread(rounds.map { it.getValue(FleetBench.Link.TCP_KTOR).usPerUpdate / it.getValue(FleetBench.Link.TCP).usPerUpdate }, "%.2f"))
 }
 
+private const val FLEET = 1000
+private const val FLEET_ROUNDS = 3
+
+/** The median of [values] and their range: `1520 (1480-1570)`. */
+private fun spread(values: List<Double>, format: String): String {
+    val sorted = values.sorted()
+    return "${format.format(sorted[sorted.size / 2])} (${format.format(sorted.first())}-${format.format(sorted.last())})"
+}
+
+/** The 1, 5 and 15 minute load averages (other programs' load on this machine). */
+private fun loadAverage(): String =
+    runCatching { java.io.File("/proc/loadavg").readText().split(' ').take(3).joinToString(" ") }
+        .getOrElse { "%.2f".format(java.lang.management.ManagementFactory.getOperatingSystemMXBean().systemLoadAverage) }
+
 private fun report(r: FleetBench.Result) = System.err.println(
-    "  fleet ${r.transport} robots=${r.n} cores=${"%.2f".format(r.cores)} us_per_update=${"%.2f".format(r.usPerUpdate)} " +
+    "  fleet ${r.transport.label} robots=${r.n} cores=${"%.2f".format(r.cores)} us_per_update=${"%.2f".format(r.usPerUpdate)} " +
         "p99_ms=${"%.2f".format(r.p99Ms)} updates=${r.updates} timed=${r.timed} late=${r.late}",
 )
 

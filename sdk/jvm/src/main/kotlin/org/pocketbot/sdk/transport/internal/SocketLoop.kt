@@ -2,39 +2,38 @@ package org.pocketbot.sdk.transport.internal
 
 import kotlinx.coroutines.CancellableContinuation
 import kotlinx.coroutines.CoroutineDispatcher
-import kotlinx.coroutines.Delay
-import kotlinx.coroutines.DisposableHandle
-import kotlinx.coroutines.ExperimentalCoroutinesApi
-import kotlinx.coroutines.InternalCoroutinesApi
 import kotlinx.coroutines.suspendCancellableCoroutine
 import java.io.IOException
 import java.nio.channels.ClosedChannelException
 import java.nio.channels.SelectionKey
 import java.nio.channels.Selector
 import java.nio.channels.SocketChannel
-import java.util.PriorityQueue
 import java.util.concurrent.ConcurrentLinkedQueue
 import kotlin.coroutines.CoroutineContext
 import kotlin.coroutines.resume
 
 /**
  * An event loop for TCP sockets: one thread that waits on its sockets (non-blocking NIO), resumes the coroutine
- * waiting on a socket the moment it can read, write or finish connecting, and is itself a [CoroutineDispatcher] with
- * its own timers. The process has a few loops ([next] hands them out in turn).
+ * waiting on a socket the moment it can read, write or finish connecting, and is itself a [CoroutineDispatcher]. The
+ * process has a few loops ([next] hands them out in turn).
  *
  * A TCP robot's link runs on its socket's loop too (see [org.pocketbot.sdk.transport.RobotDevice.eventLoop]): the
  * socket reader (in `Dispatchers.Unconfined`) reads and decodes on the loop, and the link takes the frame, updates
  * the robot's state and emits it on the same thread. A host mirroring hundreds of robots then pays no thread
  * hand-over per frame: waking a parked worker thread for every frame cost more CPU than everything else on the path.
+ * Like `Dispatchers.Main.immediate`, a coroutine resumed on the loop's own thread runs at once (kotlinx.coroutines
+ * queues nested resumptions on the thread, so stacks do not grow): the frame a reader hands over is handled before
+ * the loop looks at the next socket, without a round through the task queue.
+ *
+ * Only public kotlinx.coroutines API: the loop has no timers of its own (that would mean implementing the internal
+ * `Delay`), so a `delay` of a coroutine on the loop (the link's heartbeat, timeouts) waits on kotlinx.coroutines'
+ * default timer thread, which dispatches its resumption back here. That is a few wakes per robot and second against
+ * the hundred frames each robot sends.
  */
-@OptIn(InternalCoroutinesApi::class, ExperimentalCoroutinesApi::class)
-internal class SocketLoop private constructor(private val name: String) : CoroutineDispatcher(), Delay {
+internal class SocketLoop private constructor(private val name: String) : CoroutineDispatcher() {
     private val selector: Selector = Selector.open()
     private val requests = ConcurrentLinkedQueue<Request>()
     private val tasks = ConcurrentLinkedQueue<Runnable>()
-    /** Touched on the loop thread only; other threads add timers through [tasks]. */
-    private val timers = PriorityQueue<Timer>()
-    private var timerCount = 0L
 
     private class Request(val channel: SocketChannel, val ops: Int, val continuation: CancellableContinuation<Unit>)
 
@@ -42,19 +41,6 @@ internal class SocketLoop private constructor(private val name: String) : Corout
     private class Waiters {
         var read: CancellableContinuation<Unit>? = null
         var write: CancellableContinuation<Unit>? = null
-    }
-
-    private class Timer(val dueNanos: Long, val block: Runnable) : Comparable<Timer>, DisposableHandle {
-        @Volatile var cancelled = false
-        /** Order of scheduling, for timers due at the same nanosecond; set on the loop. */
-        var order = 0L
-
-        override fun compareTo(other: Timer): Int =
-            if (dueNanos != other.dueNanos) (dueNanos - other.dueNanos).compareTo(0) else order.compareTo(other.order)
-
-        override fun dispose() {
-            cancelled = true // left in the heap until due: cheaper than a removal from another thread
-        }
     }
 
     private val thread = Thread(::loop, name).apply { isDaemon = true; start() }
@@ -79,29 +65,12 @@ internal class SocketLoop private constructor(private val name: String) : Corout
 
     // ---- the dispatcher ----
 
+    /** A coroutine resumed on the loop's thread runs at once; from any other thread it is queued here. */
+    override fun isDispatchNeeded(context: CoroutineContext): Boolean = !onLoop
+
     override fun dispatch(context: CoroutineContext, block: Runnable) {
         tasks += block
         if (!onLoop) selector.wakeup()
-    }
-
-    override fun scheduleResumeAfterDelay(timeMillis: Long, continuation: CancellableContinuation<Unit>) {
-        val timer = schedule(timeMillis) { with(continuation) { resumeUndispatched(Unit) } }
-        continuation.invokeOnCancellation { timer.dispose() }
-    }
-
-    override fun invokeOnTimeout(timeMillis: Long, block: Runnable, context: CoroutineContext): DisposableHandle =
-        schedule(timeMillis, block)
-
-    private fun schedule(timeMillis: Long, block: Runnable): Timer {
-        val due = System.nanoTime() + timeMillis.coerceIn(0, Long.MAX_VALUE / 2_000_000) * 1_000_000
-        val timer = Timer(due, block)
-        if (onLoop) addTimer(timer) else dispatch(kotlin.coroutines.EmptyCoroutineContext, Runnable { addTimer(timer) })
-        return timer
-    }
-
-    private fun addTimer(t: Timer) {
-        t.order = timerCount++
-        timers += t
     }
 
     override fun toString(): String = name
@@ -112,11 +81,7 @@ internal class SocketLoop private constructor(private val name: String) : Corout
         while (true) {
             try {
                 while (true) register(requests.poll() ?: break)
-                val wait = waitMillis()
-                when {
-                    wait < 0 -> selector.selectNow()
-                    else -> selector.select(wait)
-                }
+                if (tasks.isNotEmpty() || requests.isNotEmpty()) selector.selectNow() else selector.select()
                 val keys = selector.selectedKeys().iterator()
                 while (keys.hasNext()) {
                     val key = keys.next()
@@ -127,29 +92,10 @@ internal class SocketLoop private constructor(private val name: String) : Corout
                         closed(key) // its socket was closed from another thread after the select
                     }
                 }
-                runDueTimers()
                 runTasks()
             } catch (e: IOException) {
                 // A select that failed on one socket: the others go on, the next round sees the closed one.
             }
-        }
-    }
-
-    /** -1: work is waiting (do not block); 0: nothing scheduled (block until woken); else ms to the next timer. */
-    private fun waitMillis(): Long {
-        if (tasks.isNotEmpty() || requests.isNotEmpty()) return -1
-        val next = timers.peek() ?: return 0
-        val nanos = next.dueNanos - System.nanoTime()
-        return if (nanos <= 0) -1 else (nanos + 999_999) / 1_000_000
-    }
-
-    private fun runDueTimers() {
-        val now = System.nanoTime()
-        while (true) {
-            val t = timers.peek() ?: return
-            if (t.dueNanos - now > 0) return
-            timers.poll()
-            if (!t.cancelled) runSafely(t.block)
         }
     }
 
