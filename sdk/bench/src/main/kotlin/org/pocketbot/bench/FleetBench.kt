@@ -368,7 +368,12 @@ internal object FleetBench {
                             buf.clear()
                             val n = try { ch.read(buf) } catch (e: java.io.IOException) { -1 }
                             if (n < 0) { key.cancel(); ch.close(); continue }
-                            decoder.feed(buf.array(), 0, n) { frame -> responders[idx].answer(frame) { writeFully(ch, Slip.encode(it)) } }
+                            try {
+                                decoder.feed(buf.array(), 0, n) { frame -> responders[idx].answer(frame) { writeFully(ch, Slip.encode(it)) } }
+                            } catch (e: java.io.IOException) {
+                                key.cancel() // the host left while answered (its goodbye's ack): the other robots go on
+                                ch.close()
+                            }
                         }
                     }
                 }

