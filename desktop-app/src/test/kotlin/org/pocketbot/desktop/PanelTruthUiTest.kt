@@ -212,6 +212,8 @@ class PanelTruthUiTest {
             val link = onNodeWithTag("robot-link-PocketBot-1", useUnmergedTree = true).text()
             assertTrue(Regex("""down for \d+ s""").containsMatchIn(link), link)
             assertEquals(1, Regex(Regex.escape(robot.address)).findAll(link).count(), "the address once: $link")
+            val driver = onNodeWithTag("driver-PocketBot-1", useUnmergedTree = true).text()
+            assertTrue(driver.endsWith("drove it when last heard"), "who drives is not known while the link is down: $driver")
 
             robot.emulated!!.reconnectLink()
             await("back") { robot.robot.connection.value == ConnectionState.Connected }
