@@ -88,7 +88,10 @@ fun SensorsView(robot: RobotModel) {
             }
             Panel("Locomotion", Modifier.weight(1f)) {
                 Value("mode", s.locomotion.mode.name.lowercase(), Modifier.testTag("loco-mode"), stale = old)
-                Value("queue", "${s.locomotion.queueLength} (running #${s.locomotion.currentId}, last finished #${s.locomotion.finishedId})",
+                // Movement id 0 is none: the robot numbers movements from 1.
+                val running = if (s.locomotion.currentId == 0) "none running" else "running #${s.locomotion.currentId}"
+                val finished = if (s.locomotion.finishedId == 0) "none finished" else "last finished #${s.locomotion.finishedId}"
+                Value("queue", "${s.locomotion.queueLength} ($running, $finished)",
                     Modifier.testTag("loco-queue"), stale = old)
                 Value("line follower", "${s.lineFollow.status.name.lowercase()} on ${s.lineFollow.segment.name.lowercase()}", stale = old)
             }
