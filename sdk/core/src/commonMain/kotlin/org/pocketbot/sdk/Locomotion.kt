@@ -226,9 +226,8 @@ public class Locomotion internal constructor(
         lastRight = encoders.right
         val h = running ?: return
         val s = settings()
-        val metresPerPulse = PI * s.geometry.wheelDiameterM / s.encoder.pulsesPerRev
-        val left = (lastLeft - startLeft) * metresPerPulse
-        val right = (lastRight - startRight) * metresPerPulse
+        val left = (lastLeft - startLeft) * s.metresPerPulse
+        val right = (lastRight - startRight) * s.metresPerPulse
         h.seenDone = when (h.movement) {
             is Movement.Straight -> (left + right) / 2
             is Movement.Rotate, is Movement.Arc -> (right - left) / s.geometry.wheelBaseM * 180 / PI

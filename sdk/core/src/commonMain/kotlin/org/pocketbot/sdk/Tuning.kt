@@ -12,7 +12,6 @@ import kotlinx.coroutines.yield
 import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SyncMode
-import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.math.sqrt
 import kotlin.time.Duration
@@ -309,7 +308,7 @@ private class SpeedProfile(movement: Movement.Straight, settings: RobotSettings,
     private val accel = settings.profile.accelMps2.value
     private val decel = settings.profile.decelMps2.value
     private val vmin = minOf(settings.profile.minSpeedMps.value, cruise)
-    private val metresPerPulse = PI * settings.geometry.wheelDiameterM.value / settings.encoder.pulsesPerRev.value
+    private val metresPerPulse = settings.store.values.value.metresPerPulse
 
     fun speedAt(state: RobotState): Double {
         val seconds = (state.time.timeMs - start.time.timeMs).coerceAtLeast(0) / 1000.0
