@@ -24,7 +24,6 @@ import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.link.CommandWithdrawnException
 import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.math.PI
-import kotlin.math.round
 import kotlin.random.Random
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -353,8 +352,6 @@ public class Locomotion internal constructor(
         }
 
         fun modeOf(s: StateLocomotion): LocoMode = s.mode
-
-        fun round3(v: Double): Double = round(v * 1000) / 1000
 
         fun describe(o: MovementOutcome): String = when (o) {
             MovementOutcome.FINISHED -> "finished"
