@@ -177,7 +177,7 @@ static void out_put(uint8_t b)
 }
 
 /* The inner loop of every packet sent: CRC and SLIP-escape `n` bytes; a chunk is written out whenever it fills,
- * the UART's ring has room for all of it. */
+ * a link's own ring has room for all of it. */
 static uint16_t out_encode(uint16_t crc, const uint8_t *p, uint8_t n)
 {
     uint8_t i = out.pos;
