@@ -2,7 +2,6 @@ package org.pocketbot.android
 
 import android.Manifest
 import android.bluetooth.BluetoothAdapter
-import android.content.Intent
 import android.graphics.Color
 import android.provider.Settings
 import android.view.MotionEvent
