@@ -1,6 +1,5 @@
 package org.pocketbot.sdk
 
-import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.PACKET_SPECS
 
 /** Base of every error the SDK throws about a robot. */

@@ -6,18 +6,14 @@ import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
-import org.pocketbot.protocol.LocoMode
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
 import org.pocketbot.protocol.MovementDone
 import org.pocketbot.protocol.MovementLog
-import org.pocketbot.protocol.MovementOutcome as WireOutcome
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.ReadMovements
 import org.pocketbot.protocol.Settings
-import org.pocketbot.protocol.StateEncoders
-import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.Stop
 import org.pocketbot.protocol.WheelSpeeds
 import org.pocketbot.sdk.internal.EMPTY_STATE
@@ -115,7 +111,7 @@ public class Locomotion internal constructor(
     private var lastTimeMs = -1L
 
     /** Mode, queue length, current and last finished movement id, as the robot reported them (full state only). */
-    public val state: StateFlow<StateLocomotion> = _state.asStateFlow()
+    public val state: StateFlow<RobotState.Locomotion> = _state.asStateFlow()
 
     /** What drives the motors now. */
     public val mode: LocoMode get() = modeOf(_state.value)
@@ -197,7 +193,7 @@ public class Locomotion internal constructor(
         val index = outstanding.indexOfFirst { it.id == p.id }
         if (index < 0) return
         val h = outstanding[index]
-        val outcome = outcomeOf(p.outcome)
+        val outcome = MovementOutcome.fromCode(p.outcome)
         end(h, outcome, p.done.toDouble(), describe(outcome))
         // The robot reports in queue order: an earlier movement still open lost its report on the way.
         if ((0 until index).any { outstanding.getOrNull(it)?.acked == true }) checkLogSoon()
@@ -219,7 +215,7 @@ public class Locomotion internal constructor(
      * Every state update: what the running movement did so far, as this host sees it in the encoder counts (kept for
      * when the robot cannot tell any more: a restart).
      */
-    internal fun watch(encoders: StateEncoders, timeMs: Long) {
+    internal fun watch(encoders: RobotState.Encoders, timeMs: Long) {
         if (lastTimeMs >= 0 && timeMs < lastTimeMs) running = null // the robot restarted: its counts begin again
         lastTimeMs = timeMs
         lastLeft = encoders.left
@@ -235,7 +231,7 @@ public class Locomotion internal constructor(
         }
     }
 
-    internal fun update(s: StateLocomotion, timeMs: Long) {
+    internal fun update(s: RobotState.Locomotion, timeMs: Long) {
         _state.value = s
         if (running?.id != s.currentId) {
             running = outstanding.firstOrNull { it.id == s.currentId }
@@ -282,7 +278,7 @@ public class Locomotion internal constructor(
 
     private fun settle(log: MovementLog, resumed: Boolean, restarted: Boolean = false) {
         val entries = HashMap<Int, Pair<MovementOutcome, Float>>()
-        for (i in 0 until log.count.coerceIn(0, log.ids.size)) entries[log.ids[i]] = outcomeOf(log.outcomes[i]) to log.done[i]
+        for (i in 0 until log.count.coerceIn(0, log.ids.size)) entries[log.ids[i]] = MovementOutcome.fromCode(log.outcomes[i]) to log.done[i]
         for (h in outstanding.toList()) {
             val e = entries[h.id] ?: continue
             end(h, e.first, e.second.toDouble(), describe(e.first))
@@ -345,15 +341,7 @@ public class Locomotion internal constructor(
         /** Longer than the robot takes to stand still and report after a movement ends (about 300 ms at most). */
         const val SETTLE_MS = 500L
 
-        fun outcomeOf(code: Int): MovementOutcome = when (code) {
-            WireOutcome.FINISHED.code -> MovementOutcome.FINISHED
-            WireOutcome.STOPPED.code -> MovementOutcome.STOPPED
-            WireOutcome.FAILSAFE.code -> MovementOutcome.FAILSAFE
-            WireOutcome.DROPPED.code -> MovementOutcome.DROPPED
-            else -> MovementOutcome.LOST
-        }
-
-        fun modeOf(s: StateLocomotion): LocoMode = s.mode
+        fun modeOf(s: RobotState.Locomotion): LocoMode = s.mode
 
         fun round3(v: Double): Double = round(v * 1000) / 1000
 

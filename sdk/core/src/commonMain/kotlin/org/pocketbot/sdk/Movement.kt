@@ -77,30 +77,6 @@ public sealed class Movement {
     }
 }
 
-/** How a queued movement ended. */
-public enum class MovementOutcome {
-    /** It ran to its end. */
-    FINISHED,
-
-    /** A host's command ([Locomotion.stop], from this host or one that watches; teleoperation, line following) ended it while it ran. */
-    STOPPED,
-
-    /**
-     * The robot's link failsafe ended it, running or still queued: the robot heard nothing from the host for
-     * settings.link.failsafe_timeout_ms and stopped on its own.
-     */
-    FAILSAFE,
-
-    /** It never started: a stop (or teleoperation, line following) cleared it from the queue, or withdrew it before it was sent. */
-    DROPPED,
-
-    /**
-     * The robot no longer holds it and has no record of how it ended: it restarted (see [RobotEvent.Restarted]), or
-     * its log no longer goes back that far. [MovementResult.done] is what this host saw it do, when it saw it run.
-     */
-    LOST,
-}
-
 /**
  * How a movement ended, as the robot reported it.
  *

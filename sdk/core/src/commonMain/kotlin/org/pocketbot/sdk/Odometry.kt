@@ -3,7 +3,6 @@ package org.pocketbot.sdk
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
-import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.math.PI
 import kotlin.math.abs
@@ -99,7 +98,7 @@ public class Odometry internal constructor(private val link: LinkPort, private v
     private fun metresPerPulse(): Double = settings.store.values.value.let { PI * it.geometry.wheelDiameterM / it.encoder.pulsesPerRev }
     private fun wheelBase(): Double = settings.store.values.value.geometry.wheelBaseM.toDouble()
 
-    internal fun update(encoders: StateEncoders, timeMs: Long) {
+    internal fun update(encoders: RobotState.Encoders, timeMs: Long) {
         val reset = lastTimeMs >= 0 && timeMs < lastTimeMs
         lastTimeMs = timeMs
         if (!started) {

@@ -22,10 +22,8 @@ import org.pocketbot.protocol.IrReceived
 import org.pocketbot.protocol.MovementDone
 import org.pocketbot.protocol.MovementLog
 import org.pocketbot.protocol.Packet
-import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.StateFull
 import org.pocketbot.protocol.StateReduced
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.SettingsMirror
 import org.pocketbot.sdk.internal.link.Link
@@ -244,7 +242,7 @@ public class Robot internal constructor(
     private inner class Client : LinkClient {
         override fun onPacket(packet: Packet) {
             when (packet) {
-                is StateFull -> applyState(packet.state, StateUpdate.Kind.FULL)
+                is StateFull -> applyState(packet.state.toModel(), StateUpdate.Kind.FULL)
                 is StateReduced -> applyState(_state.value.merge(packet), StateUpdate.Kind.REDUCED)
                 is DebugText -> debugLog.robot(packet)
                 is IrReceived -> proximity.received(packet)

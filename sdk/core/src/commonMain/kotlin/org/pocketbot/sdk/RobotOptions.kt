@@ -1,6 +1,5 @@
 package org.pocketbot.sdk
 
-import org.pocketbot.protocol.SyncMode
 import kotlin.time.Duration
 import kotlin.time.Duration.Companion.milliseconds
 import kotlin.time.Duration.Companion.seconds
