@@ -13,7 +13,7 @@ import org.pocketbot.android.model.Screen
 import org.pocketbot.android.model.JoystickModel
 import org.pocketbot.android.ui.JoystickCanvas
 import org.pocketbot.android.ui.palette
-import org.pocketbot.protocol.LineFollowStatus
+import org.pocketbot.sdk.LineFollowStatus
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.LineCalibration
 import org.pocketbot.sdk.Pose

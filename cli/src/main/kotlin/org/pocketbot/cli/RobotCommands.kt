@@ -27,11 +27,11 @@ import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.withTimeoutOrNull
 import kotlinx.coroutines.CancellationException
-import org.pocketbot.protocol.ColourMode
-import org.pocketbot.protocol.LocoMode
-import org.pocketbot.protocol.DebugModule
-import org.pocketbot.protocol.RobotState
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.ColourMode
+import org.pocketbot.sdk.LocoMode
+import org.pocketbot.sdk.DebugModule
+import org.pocketbot.sdk.RobotState
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugSource
 import org.pocketbot.sdk.Movement

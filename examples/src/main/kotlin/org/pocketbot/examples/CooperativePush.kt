@@ -9,13 +9,13 @@ import kotlinx.coroutines.launch
 import kotlinx.coroutines.selects.select
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.runSimulated
-import org.pocketbot.protocol.DistanceClass
-import org.pocketbot.protocol.ProximitySide
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.DistanceClass
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
 import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotState
 import org.pocketbot.sdk.hearsRobot
 import org.pocketbot.sdk.seesObstacle
 import org.pocketbot.sdk.transport.Discoverer
@@ -152,7 +152,7 @@ suspend fun cooperativePush(
 private val Robot.id: Int get() = identity.robotId
 
 /** Whether this receiver hears [other] close by: at the mid distance class or nearer. */
-private fun ProximitySide.isClose(other: Robot): Boolean = hearsRobot && robotId == other.id && distance.code >= DistanceClass.MID.code
+private fun RobotState.ProximitySide.isClose(other: Robot): Boolean = hearsRobot && robotId == other.id && distance >= DistanceClass.MID
 private val Robot.name: String get() = identity.name
 
 /** Waits until the robots' wheels stand still, in a state the odometry has seen. */

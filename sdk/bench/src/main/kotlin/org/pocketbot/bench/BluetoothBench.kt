@@ -11,7 +11,7 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.emulator.bluetooth.VirtualBluetooth
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.protocol.ProtocolInfo
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotOptions

@@ -173,7 +173,7 @@ internal object FleetBench {
         }
         val fleet = Fleet(scope, RobotOptions(settingsCache = InMemorySettingsCache()))
         val robots = fleet.connectAll(devices)
-        robots.forEach { it.reflector.set(org.pocketbot.protocol.SyncMode.FULL, PERIOD_MS.milliseconds) }
+        robots.forEach { it.reflector.set(org.pocketbot.sdk.SyncMode.FULL, PERIOD_MS.milliseconds) }
         robots.forEachIndexed { i, r ->
             scope.launch(Dispatchers.Unconfined) {
                 r.stateUpdates.collect { u ->

@@ -16,7 +16,7 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.Slip
 import org.pocketbot.protocol.StateReduced
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.RobotOptions
@@ -204,7 +204,7 @@ private fun realtime() {
         measuring = false
         val after = robots.map { it.linkStats.value }
 
-        val fullFrame = Slip.encode(Frames.encode(org.pocketbot.protocol.StateFull(robots[0].state.value), 1)).size
+        val fullFrame = Slip.encode(Frames.encode(org.pocketbot.protocol.StateFull(org.pocketbot.protocol.RobotState.decode(ByteArray(org.pocketbot.protocol.ProtocolInfo.STATE_SIZE), 0)), 1)).size
         val reducedFrame = Slip.encode(Frames.encode(StateReduced(1, 1, 1, 1, 1, 1, 1), 1)).size
         val fullCapacity = baud / 10 / fullFrame
         val reducedCapacity = baud / 10 / reducedFrame

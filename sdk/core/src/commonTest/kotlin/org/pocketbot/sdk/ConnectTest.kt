@@ -5,7 +5,6 @@ import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.ReadSettings
 import org.pocketbot.protocol.SetSync
-import org.pocketbot.protocol.SyncMode
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith

@@ -18,7 +18,6 @@ import org.pocketbot.protocol.SetSync
 import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.Stop
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.protocol.UpdateSettings
 import kotlin.math.PI
 import kotlin.test.Test

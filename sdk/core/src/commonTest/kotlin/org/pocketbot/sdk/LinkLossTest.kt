@@ -12,7 +12,6 @@ import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.MoveStraight
 import org.pocketbot.protocol.SetSync
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.protocol.UpdateSettings
 import kotlin.test.Test
 import kotlin.test.assertEquals

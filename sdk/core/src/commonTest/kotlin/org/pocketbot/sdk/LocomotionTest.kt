@@ -7,7 +7,6 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.test.advanceTimeBy
 import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
-import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight

@@ -4,7 +4,6 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.protocol.StateTime
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.test.Test
@@ -13,7 +12,7 @@ import kotlin.test.assertTrue
 
 class OdometryTest {
     private var t = 0L
-    private fun ScriptedRobot.encoders(left: Int, right: Int) = sendState(EMPTY_STATE.with(time = StateTime(++t, 0, 0, 0), encoders = StateEncoders(left, right)))
+    private fun ScriptedRobot.encoders(left: Int, right: Int) = sendState(WIRE_EMPTY.with(time = StateTime(++t, 0, 0, 0), encoders = StateEncoders(left, right)))
 
     // Defaults: wheel 9 mm, base 26 mm, 40 pulses per revolution, as float32 (as the robot holds them).
     private val diameter = Float.fromBits(0.009f.toRawBits()).toDouble()

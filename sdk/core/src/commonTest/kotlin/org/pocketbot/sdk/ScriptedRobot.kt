@@ -39,7 +39,6 @@ import org.pocketbot.protocol.StateReduced
 import org.pocketbot.protocol.Stop
 import org.pocketbot.protocol.UpdateSettings
 import org.pocketbot.sdk.internal.DEFAULT_SETTINGS_BYTES
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.readNumber
 import org.pocketbot.sdk.transport.LinkRate
 import org.pocketbot.sdk.transport.RobotDevice
@@ -68,7 +67,7 @@ class ScriptedRobot(
         val f = SETTINGS_FIELDS.single { it.path == name }
         org.pocketbot.sdk.internal.writeNumber(settings, f.offset, f.type, value, name)
     }
-    var state: RobotState = EMPTY_STATE
+    var state: RobotState = WIRE_EMPTY
 
     /** Every valid frame the host sent, in order: (seq, packet). */
     val received = mutableListOf<Pair<Int, Packet>>()
@@ -238,7 +237,7 @@ class ScriptedRobot(
         otherDriver = null
         session = 0
         finishedId = 0
-        state = EMPTY_STATE
+        state = WIRE_EMPTY
         send(hello(resumed = false))
     }
 

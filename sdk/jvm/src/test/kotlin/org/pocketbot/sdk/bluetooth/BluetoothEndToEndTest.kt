@@ -20,7 +20,7 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.emulator.WheelDistances
 import org.pocketbot.emulator.bluetooth.VirtualBluetooth
 import org.pocketbot.emulator.firmware.FirmwareImage
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome

@@ -15,9 +15,9 @@ import kotlinx.coroutines.flow.toList
 import kotlinx.coroutines.launch
 import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.link.LinkSettings
-import org.pocketbot.protocol.ErrorCode
+import org.pocketbot.sdk.ErrorCode
 import org.pocketbot.protocol.ProtocolInfo
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.SettingRefusedException
 import org.pocketbot.sdk.StateUpdate
@@ -76,7 +76,7 @@ class ConnectAndReflectIntegrationTest {
         assertTrue(reduced.zipWithNext().all { (a, b) -> b.timeMs > a.timeMs })
         assertTrue(robot.linkStats.value.reducedStates >= 20)
         assertEquals(0, robot.linkStats.value.dropped)
-        assertEquals(SyncMode.REDUCED.code, valueIn(emu.handleOf(robot).settingsBytes(), "sync.mode"), "settings.sync.mode on the robot")
+        assertEquals(org.pocketbot.protocol.SyncMode.REDUCED.code, valueIn(emu.handleOf(robot).settingsBytes(), "sync.mode"), "settings.sync.mode on the robot")
         robot.close()
     }
 

@@ -5,7 +5,7 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.yield
 import org.junit.jupiter.api.Test
-import org.pocketbot.protocol.LocoMode
+import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.ConnectionChange
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.Movement
