@@ -21,7 +21,7 @@ import org.pocketbot.protocol.StateFull
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugLog
 import org.pocketbot.sdk.ScriptedRobot
-import org.pocketbot.sdk.internal.EMPTY_STATE
+import org.pocketbot.sdk.WIRE_EMPTY
 import org.pocketbot.sdk.runtime
 import org.pocketbot.sdk.testOptions
 import kotlin.random.Random
@@ -76,7 +76,7 @@ class LinkTest {
         assertEquals(ConnectionState.Connected, link.connection.value)
         assertEquals(listOf(true), client.restores, "the first session is restored once")
         assertEquals(peer.robotId, link.identity.value?.robotId)
-        peer.send(StateFull(EMPTY_STATE))
+        peer.send(StateFull(WIRE_EMPTY))
         peer.send(DebugText(0, 2, "hello".encodeToByteArray()))
         peer.sendRaw(byteArrayOf(1, 2, 3)) // not a frame: counted, not handed on
         runCurrent()
@@ -98,7 +98,7 @@ class LinkTest {
         }
         link = link(peer, client)
         link.start()
-        repeat(3) { peer.send(StateFull(EMPTY_STATE)) }
+        repeat(3) { peer.send(StateFull(WIRE_EMPTY)) }
         runCurrent()
         assertEquals(listOf(1L, 2L, 3L), countsSeen, "the link's count already includes the state its client is handed")
         link.close(null)
