@@ -2,8 +2,8 @@ package org.pocketbot.cli
 
 import org.pocketbot.sdk.LineFlag
 import org.pocketbot.sdk.LocoMode
-import org.pocketbot.sdk.RobotState
 import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotState
 import org.pocketbot.sdk.StateFields
 import kotlin.math.round
 

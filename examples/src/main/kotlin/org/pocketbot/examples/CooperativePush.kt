@@ -10,12 +10,12 @@ import kotlinx.coroutines.selects.select
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.runSimulated
 import org.pocketbot.sdk.DistanceClass
-import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotState
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.hearsRobot
 import org.pocketbot.sdk.seesObstacle
 import org.pocketbot.sdk.transport.Discoverer

@@ -10,8 +10,8 @@ import kotlinx.coroutines.flow.stateIn
 import kotlinx.coroutines.flow.update
 import org.pocketbot.sdk.Colour
 import org.pocketbot.sdk.ColourMode
-import org.pocketbot.sdk.LineFollowStatus
 import org.pocketbot.sdk.DoubleSetting
+import org.pocketbot.sdk.LineFollowStatus
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.SettingRefusedException
 

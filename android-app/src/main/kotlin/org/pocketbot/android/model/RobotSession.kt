@@ -14,8 +14,8 @@ import kotlinx.coroutines.flow.combine
 import kotlinx.coroutines.flow.stateIn
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.plus
-import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotState
 

@@ -11,11 +11,11 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.emulator.bluetooth.VirtualBluetooth
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.protocol.ProtocolInfo
-import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.StateUpdate
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.connect
 import org.pocketbot.sdk.transport.TcpFraming
 import org.pocketbot.sdk.transport.TcpRobotDevice

@@ -16,11 +16,11 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.Slip
 import org.pocketbot.protocol.StateReduced
-import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.StateUpdate
+import org.pocketbot.sdk.SyncMode
 import kotlin.time.Duration.Companion.milliseconds
 
 /**

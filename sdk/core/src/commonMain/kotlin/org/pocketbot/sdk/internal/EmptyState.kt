@@ -1,11 +1,11 @@
 package org.pocketbot.sdk.internal
 
 import org.pocketbot.protocol.ProtocolInfo
+import org.pocketbot.protocol.RobotState as WireState
 import org.pocketbot.protocol.StateReduced
 import org.pocketbot.sdk.LineFlag
 import org.pocketbot.sdk.RobotState
 import org.pocketbot.sdk.toModel
-import org.pocketbot.protocol.RobotState as WireState
 
 /** The state before the first state packet: all zero, robot time 0. */
 internal val EMPTY_STATE: RobotState = WireState.decode(ByteArray(ProtocolInfo.STATE_SIZE), 0).toModel()

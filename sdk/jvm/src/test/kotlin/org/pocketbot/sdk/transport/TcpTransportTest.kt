@@ -19,12 +19,12 @@ import kotlinx.coroutines.channels.ClosedReceiveChannelException
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.flow.first
-import org.pocketbot.sdk.connect
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.HelloRequest
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.Slip
+import org.pocketbot.sdk.connect
 
 class TcpTransportTest {
     private val server = ServerSocket().apply { bind(InetSocketAddress(InetAddress.getLoopbackAddress(), 0)) }
