@@ -29,9 +29,9 @@ import org.pocketbot.android.ui.JoystickCanvas
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.RobotHandle
 import org.pocketbot.emulator.Speed
+import org.pocketbot.protocol.LocoMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.InMemorySettingsCache
-import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.Pose
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.connect

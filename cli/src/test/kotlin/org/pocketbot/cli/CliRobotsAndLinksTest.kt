@@ -7,8 +7,8 @@ import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.ForeignPeer
 import org.pocketbot.emulator.Speed
+import org.pocketbot.protocol.Colour
 import org.pocketbot.protocol.ProtocolInfo
-import org.pocketbot.sdk.Colour
 import java.io.File
 import java.net.Inet4Address
 import java.net.NetworkInterface

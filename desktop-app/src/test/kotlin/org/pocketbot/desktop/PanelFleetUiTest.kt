@@ -13,10 +13,10 @@ import androidx.compose.ui.test.runComposeUiTest
 import kotlinx.coroutines.flow.flowOf
 import org.pocketbot.desktop.ui.PanelApp
 import org.pocketbot.emulator.ForeignPeer
+import org.pocketbot.protocol.Colour
+import org.pocketbot.protocol.LocoMode
 import org.pocketbot.protocol.ProtocolInfo
-import org.pocketbot.sdk.Colour
 import org.pocketbot.sdk.ConnectionState
-import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.toDecimalString
 import org.pocketbot.sdk.transport.Discoverer
 import org.pocketbot.sdk.transport.TcpRobotDevice

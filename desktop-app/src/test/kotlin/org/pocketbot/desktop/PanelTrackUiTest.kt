@@ -8,7 +8,7 @@ import androidx.compose.ui.test.performClick
 import androidx.compose.ui.test.performTextReplacement
 import androidx.compose.ui.test.runComposeUiTest
 import org.pocketbot.desktop.ui.PanelApp
-import org.pocketbot.sdk.TrackStatus
+import org.pocketbot.protocol.TrackStatus
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertTrue

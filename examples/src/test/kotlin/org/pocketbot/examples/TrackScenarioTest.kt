@@ -8,9 +8,9 @@ import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.EmulatorConfig
 import org.pocketbot.emulator.runSimulated
 import org.pocketbot.emulator.world.Surface
+import org.pocketbot.protocol.LocoMode
+import org.pocketbot.protocol.TrackStatus
 import org.pocketbot.sdk.Fleet
-import org.pocketbot.sdk.LocoMode
-import org.pocketbot.sdk.TrackStatus
 import kotlin.math.PI
 import kotlin.math.atan2
 import kotlin.math.max

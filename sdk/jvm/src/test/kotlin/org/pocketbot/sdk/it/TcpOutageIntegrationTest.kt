@@ -6,8 +6,8 @@ import kotlinx.coroutines.runBlocking
 import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.Speed
+import org.pocketbot.protocol.LocoMode
 import org.pocketbot.sdk.ConnectionState
-import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
 import org.pocketbot.sdk.connect
