@@ -11,6 +11,8 @@ the wire structs of sdk/protocol.
 The classes have internal constructors and no `copy`/`componentN`: a field added to the schema breaks no caller.
 """
 
+import textwrap
+
 from .model import HEADER, PRIMS, camel
 
 OUT = "sdk/core/src/commonMain/kotlin/org/pocketbot/sdk/RobotState.kt"
@@ -33,6 +35,14 @@ def _sentence(text):
     return text[:1].upper() + text[1:] + ("" if text.endswith(".") else ".")
 
 
+def _kdoc(text, indent):
+    """A KDoc comment, on one line when it fits in 120 columns, else wrapped."""
+    one = f"{indent}/** {text} */"
+    if len(one) <= 120:
+        return [one]
+    return [f"{indent}/**"] + [f"{indent} * {line}" for line in textwrap.wrap(text, 116 - len(indent))] + [f"{indent} */"]
+
+
 def flag_class(name):
     return camel(name[:-1] if name.endswith("s") else name, True)
 
@@ -41,8 +51,7 @@ def _enum(name, e):
     cls = camel(name, True)
     docs = e.get("docs", {})
     extra, extra_doc = EXTRA.get(name, ("unknown", "A code this SDK does not know (a newer robot sent it)"))
-    o = ["/**", f" * {_sentence(e.get('doc', ''))}", " */",
-         f"public enum class {cls}(internal val code: Int) {{"]
+    o = _kdoc(_sentence(e.get("doc", "")), "") + [f"public enum class {cls}(internal val code: Int) {{"]
     # An enum with a value of that name (colour's `unknown`) takes the codes it does not know as that value.
     entries = list(e["values"].items()) + ([] if extra in e["values"] else [(extra, -1)])
     for i, (k, v) in enumerate(entries):
@@ -50,7 +59,7 @@ def _enum(name, e):
         if k == extra and k in e["values"] and not doc:
             doc = "Not known to the robot, or a code this SDK does not know (a newer robot sent it)"
         if doc:
-            o.append(f"    /** {_sentence(doc)} */")
+            o += _kdoc(_sentence(doc), "    ")
         o.append(f"    {k.upper()}({v})" + (";" if i == len(entries) - 1 else ","))
     o += ["", "    internal companion object {",
           f"        /** The value with this wire code; [{extra.upper()}] for a code this SDK does not know. */",
@@ -65,11 +74,11 @@ def _flags(name, fl):
     cls = flag_class(name)
     docs = fl.get("docs", {})
     values = list(fl["values"].items())
-    o = [f"/** {_sentence(fl.get('doc', ''))} A flags field of the state is a `Set` of these. */",
-         f"public enum class {cls}(internal val mask: Int) {{"]
+    o = _kdoc(f"{_sentence(fl.get('doc', ''))} A flags field of the state is a `Set` of these.", "")
+    o.append(f"public enum class {cls}(internal val mask: Int) {{")
     for i, (k, v) in enumerate(values):
         if k in docs:
-            o.append(f"    /** {_sentence(docs[k])} */")
+            o += _kdoc(_sentence(docs[k]), "    ")
         o.append(f"    {k.upper()}(0x{v:02X})" + (";" if i == len(values) - 1 else ","))
     o += ["", "    internal companion object {",
           "        // Every combination of the bits, made once: a state update allocates no set.",
@@ -115,17 +124,17 @@ def _to_model(f, expr):
     return expr
 
 
-def _doc(f):
+def _doc(f, indent):
     unit = f", in {f.unit}" if f.unit else ""
-    return f"/** {_sentence(f.doc + unit)} */"
+    return _kdoc(_sentence(f.doc + unit), indent)
 
 
 def _nested(s, name, doc, nested):
     """A state group (or shared struct) as a class nested in RobotState."""
     fields = s.fields
-    o = [f"    /** {_sentence(doc)} */", f"    public class {name} internal constructor("]
+    o = _kdoc(_sentence(doc), "    ") + [f"    public class {name} internal constructor("]
     for f in fields:
-        o.append(f"        {_doc(f)}")
+        o += _doc(f, "        ")
         o.append(f"        public val {camel(f.name)}: {_kt_type(f, nested)},")
     o += ["    ) {",
           "        override fun equals(other: Any?): Boolean =",
@@ -179,7 +188,7 @@ def emit(model):
           " */",
           "public class RobotState internal constructor("]
     for f in state.fields:
-        o.append(f"    {_doc(f)}")
+        o += _doc(f, "    ")
         o.append(f"    public val {camel(f.name)}: {_kt_type(f)},")
     o += [") {"]
     for sh in shared:

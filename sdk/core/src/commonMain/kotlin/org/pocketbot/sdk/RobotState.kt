@@ -340,21 +340,36 @@ public class RobotState internal constructor(
     public class Errors internal constructor(
         /** Frames whose CRC failed. */
         public val crc: Int,
-        /** Runs of received bytes (between two ENDs) that made no frame: bad SLIP, shorter than 5 or longer than 125 bytes. */
+        /**
+         * Runs of received bytes (between two ENDs) that made no frame: bad SLIP, shorter than 5 or longer than 125
+         * bytes.
+         */
         public val framing: Int,
         /** Frames with a sound CRC that were refused, for any reason. */
         public val rejected: Int,
-        /** Received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped). */
+        /**
+         * Received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose
+         * byte is dropped).
+         */
         public val rxOverflow: Int,
         /** Packets not sent because the transmit buffer was full. */
         public val txDropped: Int,
-        /** Bluetooth HCI build: H4 packets from the controller that broke the wire's framing (bad packet type, ACL longer than announced, a packet cut off). */
+        /**
+         * Bluetooth HCI build: H4 packets from the controller that broke the wire's framing (bad packet type, ACL
+         * longer than announced, a packet cut off).
+         */
         public val btWire: Int,
         /** Bluetooth HCI build: commands the controller did not answer within 1 s. */
         public val btTimeouts: Int,
-        /** Bluetooth HCI build: controller resets after a wire error, a timeout or a hardware error (links were dropped and are accepted again). */
+        /**
+         * Bluetooth HCI build: controller resets after a wire error, a timeout or a hardware error (links were dropped
+         * and are accepted again).
+         */
         public val btResets: Int,
-        /** Bluetooth HCI build: received L2CAP PDUs dropped (longer than the MTU, out of order, for no open channel, or arriving while an answer waited for room). */
+        /**
+         * Bluetooth HCI build: received L2CAP PDUs dropped (longer than the MTU, out of order, for no open channel, or
+         * arriving while an answer waited for room).
+         */
         public val btDropped: Int,
     ) {
         override fun equals(other: Any?): Boolean =
@@ -399,9 +414,7 @@ public class RobotState internal constructor(
     override fun toString(): String = "RobotState(time=$time, encoders=$encoders, wheels=$wheels, line=$line, lineFollow=$lineFollow, proximity=$proximity, colour=$colour, accel=$accel, power=$power, indicators=$indicators, locomotion=$locomotion, track=$track, errors=$errors)"
 }
 
-/**
- * State of the line follower.
- */
+/** State of the line follower. */
 public enum class LineFollowStatus(internal val code: Int) {
     OFF(0),
     FOLLOWING(1),
@@ -420,9 +433,7 @@ public enum class LineFollowStatus(internal val code: Int) {
     }
 }
 
-/**
- * Surface colour classified by the colour sensor.
- */
+/** Surface colour classified by the colour sensor. */
 public enum class Colour(internal val code: Int) {
     /** Not known to the robot, or a code this SDK does not know (a newer robot sent it). */
     UNKNOWN(0),
@@ -446,9 +457,7 @@ public enum class Colour(internal val code: Int) {
     }
 }
 
-/**
- * What drives the motors.
- */
+/** What drives the motors. */
 public enum class LocoMode(internal val code: Int) {
     IDLE(0),
     MOVEMENT(1),
@@ -474,9 +483,7 @@ public enum class LocoMode(internal val code: Int) {
     }
 }
 
-/**
- * What the track behaviour is doing.
- */
+/** What the track behaviour is doing. */
 public enum class TrackStatus(internal val code: Int) {
     /** Not running. */
     OFF(0),
@@ -488,7 +495,10 @@ public enum class TrackStatus(internal val code: Int) {
     DETOUR(3),
     /** Turning round (reverse). */
     TURNING(4),
-    /** The line is gone: searching for it (sweeps turning on the spot, backs up a little); motors off when the search ended without it, until the line is under the sensor again. */
+    /**
+     * The line is gone: searching for it (sweeps turning on the spot, backs up a little); motors off when the search
+     * ended without it, until the line is under the sensor again.
+     */
     LOST(5),
     /** A code this SDK does not know (a newer robot sent it). */
     UNKNOWN(-1);
@@ -507,9 +517,7 @@ public enum class TrackStatus(internal val code: Int) {
     }
 }
 
-/**
- * The directed IR LEDs of a robot (about +-15 degrees each).
- */
+/** The directed IR LEDs of a robot (about +-15 degrees each). */
 public enum class IrLed(internal val code: Int) {
     FRONT(0),
     RIGHT(1),
@@ -530,9 +538,7 @@ public enum class IrLed(internal val code: Int) {
     }
 }
 
-/**
- * Rough distance of another robot, from the lowest IR power it was heard at.
- */
+/** Rough distance of another robot, from the lowest IR power it was heard at. */
 public enum class DistanceClass(internal val code: Int) {
     NONE(0),
     FAR(1),
@@ -553,9 +559,7 @@ public enum class DistanceClass(internal val code: Int) {
     }
 }
 
-/**
- * How the robot mirrors its state to the host.
- */
+/** How the robot mirrors its state to the host. */
 public enum class SyncMode(internal val code: Int) {
     NONE(0),
     FULL(1),
@@ -574,9 +578,7 @@ public enum class SyncMode(internal val code: Int) {
     }
 }
 
-/**
- * Line following colour mode: with `segments`, red tape slows down and blue tape speeds up.
- */
+/** Line following colour mode: with `segments`, red tape slows down and blue tape speeds up. */
 public enum class ColourMode(internal val code: Int) {
     PLAIN(0),
     SEGMENTS(1),
@@ -593,9 +595,7 @@ public enum class ColourMode(internal val code: Int) {
     }
 }
 
-/**
- * Which IR receiver heard a message.
- */
+/** Which IR receiver heard a message. */
 public enum class Side(internal val code: Int) {
     FRONT(0),
     REAR(1),
@@ -612,9 +612,7 @@ public enum class Side(internal val code: Int) {
     }
 }
 
-/**
- * What was wrong with a received packet (error packet and Kotlin typed errors).
- */
+/** What was wrong with a received packet (error packet and Kotlin typed errors). */
 public enum class ErrorCode(internal val code: Int) {
     NONE(0),
     BAD_CRC(1),
@@ -629,9 +627,15 @@ public enum class ErrorCode(internal val code: Int) {
     FRAMING(10),
     BUSY(11),
     BAD_SEQUENCE(12),
-    /** The command changes the robot, and another host drives it: this link only watches (the `driver` packet just before it names the driver). */
+    /**
+     * The command changes the robot, and another host drives it: this link only watches (the `driver` packet just
+     * before it names the driver).
+     */
     NOT_DRIVER(13),
-    /** Not the robot but what connects to it (the emulator's endpoint, a gateway): every host link of the robot is in use, so this host got none; detail: how many the robot has. */
+    /**
+     * Not the robot but what connects to it (the emulator's endpoint, a gateway): every host link of the robot is in
+     * use, so this host got none; detail: how many the robot has.
+     */
     NO_FREE_LINK(14),
     /** A code this SDK does not know (a newer robot sent it). */
     UNKNOWN(-1);
@@ -659,9 +663,7 @@ public enum class ErrorCode(internal val code: Int) {
     }
 }
 
-/**
- * The firmware module that wrote a debug text.
- */
+/** The firmware module that wrote a debug text. */
 public enum class DebugModule(internal val code: Int) {
     MAIN(0),
     PROTOCOL(1),
@@ -692,9 +694,7 @@ public enum class DebugModule(internal val code: Int) {
     }
 }
 
-/**
- * How a queued movement ended (movement_done, movement_log).
- */
+/** How a queued movement ended (movement_done, movement_log). */
 public enum class MovementOutcome(internal val code: Int) {
     /** It ran to its end. */
     FINISHED(0),
@@ -704,7 +704,11 @@ public enum class MovementOutcome(internal val code: Int) {
     FAILSAFE(2),
     /** A host command cleared it from the queue before it started. */
     DROPPED(3),
-    /** The robot no longer holds it and has no record of how it ended: it restarted (see [RobotEvent.Restarted]), or its log no longer goes back that far, or it reported an outcome this SDK does not know. [MovementResult.done] is what this host saw it do, when it saw it run. */
+    /**
+     * The robot no longer holds it and has no record of how it ended: it restarted (see [RobotEvent.Restarted]), or
+     * its log no longer goes back that far, or it reported an outcome this SDK does not know. [MovementResult.done] is
+     * what this host saw it do, when it saw it run.
+     */
     LOST(-1);
 
     internal companion object {
