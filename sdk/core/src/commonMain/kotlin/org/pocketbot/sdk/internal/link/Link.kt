@@ -2,6 +2,7 @@ package org.pocketbot.sdk.internal.link
 
 import kotlinx.coroutines.CancellationException
 import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.CompletableJob
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Job
 import kotlinx.coroutines.channels.BufferOverflow
@@ -83,6 +84,8 @@ internal class Link(
     /** Scope of the robot's own coroutines. */
     private val scope: CoroutineScope,
     private val robotJob: Job,
+    /** The robot in its caller's scope: the link's coroutines and the goodbye at [close] run under it. */
+    private val lifetime: CompletableJob,
     override val debugLog: DebugLog,
     /** The SDK's random choices for this robot ([org.pocketbot.sdk.RobotRuntime.random]). */
     val random: Random,
@@ -421,9 +424,9 @@ internal class Link(
         val connected = _connection.value == ConnectionState.Connected
         setConnection(ConnectionState.Closed(cause))
         val transport = current?.transport
-        if (goodbye && connected && transport != null) {
-            // Outside the robot's scope, which ends now (a job of its own); bounded by a command timeout.
-            CoroutineScope(context + Job()).launch {
+        if (goodbye && connected && transport != null && lifetime.isActive) {
+            // Beside the link's coroutines, which end now; bounded by a command timeout. The caller's scope waits for it.
+            CoroutineScope(context + lifetime).launch {
                 try {
                     withTimeoutOrNull(options.commandTimeout) { transport.send(table.open(Goodbye(QueueOnLeave.FINISH.ordinal)).frame) }
                 } catch (e: Throwable) {
@@ -436,6 +439,7 @@ internal class Link(
             transport?.close()
         }
         robotJob.cancel()
+        lifetime.complete()
     }
 
     // ---- incoming ----
