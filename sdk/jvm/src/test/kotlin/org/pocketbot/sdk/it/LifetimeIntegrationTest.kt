@@ -56,7 +56,7 @@ class LifetimeIntegrationTest {
             val fleet = Fleet(CoroutineScope(Dispatchers.Default + fleetOwner), itOptions())
             val robots = fleet.connectAll(devices)
             val fleetWorking = coroutinesUnder(fleetOwner)
-            assertTrue(fleetWorking >= 3 * working, "three robots' coroutines in the fleet's scope: $fleetWorking")
+            assertTrue(fleetWorking >= 3 * 4, "three robots' coroutines in the fleet's scope: $fleetWorking")
             fleetOwner.cancel()
             withTimeout(2.seconds) { fleetOwner.join() }
             assertEquals(0, coroutinesUnder(fleetOwner), "coroutines left after the fleet's scope was cancelled")
