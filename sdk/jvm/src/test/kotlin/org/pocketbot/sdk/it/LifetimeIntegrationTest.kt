@@ -83,7 +83,10 @@ class LifetimeIntegrationTest {
             }
             assertEquals(emptySet(), leftOver, "threads started by the robots and still alive")
             // Every coroutine of the process, also one a robot might have started outside its scope's tree.
-            assertEquals(emptyList(), allCoroutines() - coroutinesBefore, "coroutines of the robots still alive")
+            val coroutinesAfter = allCoroutines()
+            println("lifetimes: one robot ran $working coroutines in its scope, three in a fleet $fleetWorking; left after: " +
+                "${coroutinesAfter.size - coroutinesBefore.size} coroutines, ${leftOver.size} threads; coroutineScope waited $waitedMs ms")
+            assertEquals(emptyList(), coroutinesAfter - coroutinesBefore, "coroutines of the robots still alive")
         }
     } }
 
