@@ -432,17 +432,15 @@ internal class Link(
         val connected = _connection.value == ConnectionState.Connected
         setConnection(ConnectionState.Closed(cause))
         val transport = current?.transport
-        if (goodbye && connected && transport != null && lifetime.isActive) {
+        if (goodbye && connected && transport != null) {
             // Beside the link's coroutines, which end now; bounded by a command timeout. The caller's scope waits for it.
             CoroutineScope(context + lifetime).launch {
                 try {
                     withTimeoutOrNull(options.commandTimeout) { transport.send(table.open(Goodbye(QueueOnLeave.FINISH.ordinal)).frame) }
                 } catch (e: Throwable) {
                     // Gone already: the robot's failsafe stops what this host drove.
-                } finally {
-                    transport.close()
                 }
-            }
+            }.invokeOnCompletion { transport.close() } // also when the scope was cancelled before it ran
         } else {
             transport?.close()
         }
