@@ -157,7 +157,8 @@ bench: bench-emulator bench-sdk bench-desktop
 
 bench-emulator: wasm
 	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
-	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
+	$(MAKE) -C firmware native-fleet
+	$(JAVA) -XX:-DontCompileHugeMethods -Dpocketbot.bench.native=firmware/build/native/fleet -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
 
 # Where a robot-millisecond goes: the emulator benchmark under Java Flight Recorder (1 ms CPU samples), then the
 # samples by category (firmware, line sensor geometry, IR, collisions, physics, link, stepping). ARGS: fleet sizes.

@@ -32,11 +32,17 @@ public fun main(args: Array<String>) {
     // Warm-up: let the JIT compile the firmware and the emulator before anything is measured.
     run(10, measureS = 40, warmS = 1)
     run(100, measureS = 2, warmS = 1)
+    val native = System.getProperty("pocketbot.bench.native")?.let { NativeFleet(java.io.File(it)) }
     for (n in sizes) {
+        // The native fleet runs just before and just after the emulator, so the machine's drift falls on both sides.
+        val nativeBefore = native?.run(n)
         val result = run(n)
-        println("emulator robots=$n realtime_factor=${"%.2f".format(result.factor)}")
+        val nativeUs = nativeBefore?.let { (it + native.run(n)) / 2 }
+        val ratio = nativeUs?.let { " native_ratio=${"%.2f".format(result.cpuUsPerRobotMs / it)}" } ?: ""
+        println("emulator robots=$n realtime_factor=${"%.2f".format(result.factor)}$ratio")
         println("emulator robots=$n cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)}")
         println("emulator robots=$n heap_bytes_per_robot=${result.heapBytesPerRobot}")
+        if (nativeUs != null) println("native robots=$n cpu_us_per_robot_ms=${"%.2f".format(nativeUs)}")
         System.out.flush()
         val perSecond = result.secondFactors.sorted()
         System.err.println(
@@ -49,6 +55,34 @@ public fun main(args: Array<String>) {
         )
     }
 }
+
+/**
+ * The same fleet natively (firmware/native/fleet.c, built by `make -C firmware native-fleet`): the firmware's wasm
+ * compiled to machine code, one instance per robot, driven as the emulator drives it, on one thread. Its CPU time
+ * per robot and simulated millisecond is what the emulator's is compared with (`native_ratio`).
+ */
+private class NativeFleet(private val binary: java.io.File) {
+    private val round = Worlds.load("round")
+    private val track = round.tapes.single() as Tape.Arc
+
+    /** CPU microseconds per robot and simulated millisecond for [n] robots. */
+    fun run(n: Int): Double {
+        val starts = round.starts.take(3).flatMap { listOf(it.xM, it.yM, it.headingDeg) }
+        val frame = Slip.encode(Frames.encode(LineFollow(1, 0, 0f), 1)).joinToString("") { "%02x".format(it) }
+        val args = listOf(binary.path, "$n", "${warmSeconds(n)}", "${measureSeconds(n)}", "${round.widthM}", "${track.center.x}",
+            "${track.center.y}", "${track.radiusM}", "${track.widthM}", "${round.ambientAdc}") + starts.map { "$it" } + frame
+        val process = ProcessBuilder(args).redirectError(ProcessBuilder.Redirect.INHERIT).start()
+        val out = process.inputStream.bufferedReader().readText()
+        check(process.waitFor() == 0) { "${binary.path} failed: $out" }
+        System.err.print("  " + out)
+        return Regex("cpu_us_per_robot_ms=([0-9.]+)").find(out)?.groupValues?.get(1)?.toDouble() ?: error("no result from ${binary.path}: $out")
+    }
+}
+
+private fun warmSeconds(n: Int) = if (n >= 1000) 1 else 2
+
+private fun measureSeconds(n: Int) =
+    System.getProperty("pocketbot.bench.seconds")?.toIntOrNull() ?: when { n <= 1 -> 30; n <= 10 -> 20; n <= 100 -> 5; else -> 3 }
 
 private fun loadAverage(): String =
     runCatching { java.io.File("/proc/loadavg").readText().split(' ').take(3).joinToString(",") }.getOrDefault("?")
@@ -93,10 +127,10 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
             val r = emu.addRobot(pose = pose)
             r.hostSendRaw(frame)
         }
-        val warm = warmS ?: if (n >= 1000) 1 else 2
+        val warm = warmS ?: warmSeconds(n)
         emu.runFor(warm.seconds)
         val heapPerRobot = (liveHeap() - emptyHeap) / n
-        val simS = measureS ?: System.getProperty("pocketbot.bench.seconds")?.toIntOrNull() ?: when { n <= 1 -> 30; n <= 10 -> 20; n <= 100 -> 5; else -> 3 }
+        val simS = measureS ?: measureSeconds(n)
         val os = java.lang.management.ManagementFactory.getOperatingSystemMXBean() as com.sun.management.OperatingSystemMXBean
         val cpu0 = os.processCpuTime
         val t0 = System.nanoTime()
