@@ -89,6 +89,9 @@ internal class SimRobot(
     /** Set by the emulator while a step defers this robot to the serial contact phase. */
     var deferred = false
 
+    /** Set by [SimWorld.markAlone] while nothing can reach this robot for a block of steps. */
+    var alone = false
+
     /** Emulator time of sim_init: the firmware counts its ticks from there. */
     var bootTicks = 0L; private set
 
