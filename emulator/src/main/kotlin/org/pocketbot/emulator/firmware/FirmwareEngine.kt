@@ -2,9 +2,13 @@ package org.pocketbot.emulator.firmware
 
 import com.dylibso.chicory.runtime.ExportFunction
 import com.dylibso.chicory.runtime.GlobalInstance
+import com.dylibso.chicory.runtime.HostFunction
 import com.dylibso.chicory.runtime.ImportValues
 import com.dylibso.chicory.runtime.Instance
+import com.dylibso.chicory.runtime.WasmFunctionHandle
+import com.dylibso.chicory.wasm.types.FunctionType
 import com.dylibso.chicory.wasm.types.MutabilityType
+import com.dylibso.chicory.wasm.types.ValType
 
 /**
  * One Chicory instance of a firmware image that runs the firmware of many robots, one call at a time, on one thread.
@@ -19,7 +23,12 @@ import com.dylibso.chicory.wasm.types.MutabilityType
 internal class FirmwareEngine(image: FirmwareImage) {
     val memory: LinearMemory
     val instance: Instance
+    private var host: FirmwareHost? = null
     private var bound: FirmwareInstance? = null
+    // One result array per engine, reused: Chicory reads it before the next host call, and these calls happen
+    // several times per robot and simulated millisecond.
+    private val sweepResult = LongArray(1)
+    private val sensorResult = LongArray(1)
     private val globals: Array<GlobalInstance>
 
     val init: ExportFunction
@@ -31,9 +40,17 @@ internal class FirmwareEngine(image: FirmwareImage) {
     val runEvents: ExportFunction
 
     init {
-        // The firmware imports nothing (sim_abi.h): sensor readings and IR messages are data in its memory.
+        val i32 = ValType.I32
+        val i64 = ValType.I64
+        val imports = ImportValues.builder()
+            .addFunction(
+                HostFunction("env", "line_adc_sweep", FunctionType.of(listOf(i32), listOf(i64)), HostCall(LINE_ADC_SWEEP)),
+                HostFunction("env", "sensor_read", FunctionType.of(listOf(i32), listOf(i32)), HostCall(SENSOR_READ)),
+                HostFunction("env", "ir_send", FunctionType.of(listOf(i32, i32, i32, i32, i32, i32), listOf()), HostCall(IR_SEND)),
+            )
+            .build()
         var created: LinearMemory? = null
-        val builder = Instance.builder(image.module).withImportValues(ImportValues.empty())
+        val builder = Instance.builder(image.module).withImportValues(imports)
             .withMemoryFactory { limits -> LinearMemory(limits).also { created = it } }
         image.machineFactory?.let { builder.withMachineFactory(it) }
         instance = builder.build()
@@ -59,6 +76,7 @@ internal class FirmwareEngine(image: FirmwareImage) {
     fun enter(fw: FirmwareInstance) {
         check(bound == null) { "a firmware call from inside another firmware call on the same thread" }
         bound = fw
+        host = fw.host
         memory.bytes = fw.linear.bytes
         val g = fw.globals
         for (k in globals.indices) { globals[k].setValueLow(g[2 * k]); globals[k].setValueHigh(g[2 * k + 1]) }
@@ -68,6 +86,7 @@ internal class FirmwareEngine(image: FirmwareImage) {
         fw.linear.bytes = memory.bytes // a memory.grow replaced the array
         save(fw.globals)
         memory.bytes = EMPTY
+        host = null
         bound = null
     }
 
@@ -75,10 +94,31 @@ internal class FirmwareEngine(image: FirmwareImage) {
         for (k in globals.indices) { into[2 * k] = globals[k].valueLow; into[2 * k + 1] = globals[k].valueHigh }
     }
 
+    /**
+     * The firmware's imports, all of one class: the compiled firmware calls every import through one call site, which
+     * then sees a single receiver class and the JIT inlines the call (three lambdas made it a virtual call).
+     */
+    private inner class HostCall(private val import: Int) : WasmFunctionHandle {
+        override fun apply(instance: Instance, args: LongArray): LongArray? {
+            val host = host!!
+            return when (import) {
+                LINE_ADC_SWEEP -> sweepResult.also { it[0] = host.lineAdcSweep(args[0].toInt()) }
+                SENSOR_READ -> sensorResult.also { it[0] = host.sensorRead(args[0].toInt()).toLong() }
+                else -> {
+                    host.irSend(args[0].toInt(), args[1].toInt(), args[2].toInt(), args[3].toInt(), args[4].toInt(), args[5].toInt())
+                    null
+                }
+            }
+        }
+    }
+
     /** Export [name] of this instance, or null. */
     fun exportOrNull(name: String): ExportFunction? = runCatching { instance.export(name) }.getOrNull()
 
     private companion object {
         val EMPTY = ByteArray(0)
+        const val LINE_ADC_SWEEP = 0
+        const val SENSOR_READ = 1
+        const val IR_SEND = 2
     }
 }

@@ -3,7 +3,22 @@ package org.pocketbot.emulator.firmware
 import com.dylibso.chicory.runtime.Memory
 import com.dylibso.chicory.wasm.types.MemoryLimits
 
-/** The sensors of sim_abi.h (`enum sim_sensor`): indices of sim_inputs_t.sensor, each in its unit. */
+/** What the firmware imports (module "env" of firmware/hal/sim/sim_abi.h), answered by the simulated robot. */
+public interface FirmwareHost {
+    /**
+     * One line sensor ADC sweep: the four detectors (0..3) read now with the emitters in the bit mask lit,
+     * each 0..4095, detector d in bits 16d..16d+15 (sim_abi.h line_adc_sweep).
+     */
+    public fun lineAdcSweep(emitters: Int): Long
+
+    /** One of the [SimSensor] values, in its physical unit. */
+    public fun sensorRead(sensor: Int): Int
+
+    /** The firmware sends an IR message now. */
+    public fun irSend(senderId: Int, led: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int)
+}
+
+/** sensor_read ids of sim_abi.h. */
 public object SimSensor {
     public const val BATTERY_MV: Int = 0
     public const val CURRENT_MA: Int = 1
@@ -22,7 +37,7 @@ public object SimSensor {
  * firmware/hal/sim/sim_abi.h, which run in the calling thread's [FirmwareEngine] (one Chicory instance per thread
  * that every robot's firmware runs in, in turn). Not thread-safe: one thread at a time drives it.
  */
-public class FirmwareInstance(private val image: FirmwareImage) {
+public class FirmwareInstance(private val image: FirmwareImage, internal val host: FirmwareHost) {
     /** An engine of its own when the image's robots cannot share one. */
     private val ownEngine: FirmwareEngine? = if (image.sharesEngines) null else FirmwareEngine(image)
 
@@ -45,18 +60,12 @@ public class FirmwareInstance(private val image: FirmwareImage) {
     /** Address of the event buffer that [runEvents] reads (sim_events). */
     public val eventsAddress: Int
 
-    /** Addresses of sim_inputs_t (what the sensors face) and sim_ir_out_t (the IR messages sent). */
-    public val inputsAddress: Int
-    public val irOutAddress: Int
-
     /** Address of the EEPROM (sim_eeprom), or -1 for a firmware without one (the stand-in). */
     public val eepromAddress: Int
 
     init {
         fun address(name: String): Int = call { it.instance.export(name).apply()[0].toInt() }
         eventsAddress = address("sim_events")
-        inputsAddress = address("sim_inputs")
-        irOutAddress = address("sim_ir_out")
         outputsAddress = address("sim_outputs")
         stateAddress = address("sim_state")
         settingsAddress = address("sim_settings")
@@ -119,46 +128,6 @@ public class FirmwareInstance(private val image: FirmwareImage) {
         call { it.irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong()) }
     }
 
-    // sim_inputs_t of sim_abi.h: what the sensors face during the next calls.
-
-    /** The line sensor's conversion: a detector's reading with its emitters off, what a lit emitter adds over white
-     *  floor, what it adds more over black tape, and the noise's standard deviation (ADC counts). */
-    public fun setLineSensorModel(ambientAdc: Double, whiteAdc: Double, spanAdc: Double, noiseAdc: Double) {
-        linear.writeF64(inputsAddress + IN_LINE_AMBIENT, ambientAdc)
-        linear.writeF64(inputsAddress + IN_LINE_WHITE, whiteAdc)
-        linear.writeF64(inputsAddress + IN_LINE_SPAN, spanAdc)
-        linear.writeF64(inputsAddress + IN_LINE_NOISE, noiseAdc)
-    }
-
-    /** Darkness under line sensor spot [spot] (0..7, left to right), 0 white .. 1 black. */
-    public fun setLineDark(spot: Int, darkness: Double) { linear.writeF64(inputsAddress + IN_LINE_DARK + 8 * spot, darkness) }
-
-    /** The true value of [SimSensor] [sensor], in its unit. */
-    public fun setSensor(sensor: Int, value: Double) { linear.writeF64(inputsAddress + IN_SENSOR + 8 * sensor, value) }
-
-    /** Whether readings are noisy, and the state of the noise generator (a splitmix64 stream) they draw from. */
-    public fun setNoise(on: Boolean, state: Long) {
-        linear.writeLong(inputsAddress + IN_NOISE_STATE, state)
-        linear.writeI32(inputsAddress + IN_NOISE, if (on) 1 else 0)
-    }
-
-    /** The noise generator's state after the firmware drew from it. */
-    public fun noiseState(): Long = linear.readLong(inputsAddress + IN_NOISE_STATE)
-
-    // sim_ir_out_t of sim_abi.h: the IR messages sent since the last [clearIrOut].
-
-    public fun irOutCount(): Int = linear.readInt(irOutAddress).coerceIn(0, IR_OUT_CAPACITY)
-
-    /** Field [field] (IR_SENDER .. IR_PAYLOAD_HI) of message [k]. */
-    public fun irOut(k: Int, field: Int): Int = linear.readInt(irOutAddress + IR_OUT_MSG + k * IR_MSG_BYTES + 4 * field)
-
-    /** Empties the buffer; returns how many messages found it full since the last call. */
-    public fun clearIrOut(): Int {
-        val dropped = linear.readInt(irOutAddress + IR_OUT_DROPPED)
-        linear.writeLong(irOutAddress, 0L) // count and dropped
-        return dropped
-    }
-
     // sim_outputs_t of sim_abi.h (the emulator's own contract with the firmware, not part of the protocol).
     public fun pwmLeft(): Int = linear.readShort(outputsAddress + OUT_PWM_LEFT).toInt()
     public fun pwmRight(): Int = linear.readShort(outputsAddress + OUT_PWM_RIGHT).toInt()
@@ -175,25 +144,6 @@ public class FirmwareInstance(private val image: FirmwareImage) {
         public const val EVENT_UART_RX: Int = 0
         public const val EVENT_ENCODER_EDGE: Int = 1
         private const val EVENT_BYTES = 16
-        /** sim_ir_msg_t's fields, in order; SIM_IR_OUT_CAPACITY. */
-        public const val IR_SENDER: Int = 0
-        public const val IR_LED: Int = 1
-        public const val IR_POWER: Int = 2
-        public const val IR_LEN: Int = 3
-        public const val IR_PAYLOAD_LO: Int = 4
-        public const val IR_PAYLOAD_HI: Int = 5
-        public const val IR_OUT_CAPACITY: Int = 32
-        private const val IR_MSG_BYTES = 24
-        private const val IR_OUT_DROPPED = 4
-        private const val IR_OUT_MSG = 8
-        private const val IN_NOISE_STATE = 0
-        private const val IN_NOISE = 8
-        private const val IN_LINE_AMBIENT = 16
-        private const val IN_LINE_WHITE = 24
-        private const val IN_LINE_SPAN = 32
-        private const val IN_LINE_NOISE = 40
-        private const val IN_LINE_DARK = 48
-        private const val IN_SENSOR = 112
         private const val OUT_PWM_LEFT = 0
         private const val OUT_PWM_RIGHT = 2
         private const val OUT_LED = 4

@@ -11,11 +11,11 @@ import kotlin.test.assertTrue
  * must be exactly what it would be with the engine to itself.
  */
 class FirmwareEngineTest {
-    /** The same sensor inputs for every robot: what differs between two robots here is their id and their history. */
-    private fun still(image: FirmwareImage) = FirmwareInstance(image).apply {
-        setLineSensorModel(300.0, 110.0, 1790.0, 6.0)
-        for (s in 0 until 10) setSensor(s, if (s == SimSensor.BATTERY_MV) 3900.0 else 20.0)
-        setNoise(true, 42)
+    /** The same inputs for every robot: what differs between two robots here is their id and their history. */
+    private object Still : FirmwareHost {
+        override fun lineAdcSweep(emitters: Int): Long = 0x0100_0100_0100_0100L
+        override fun sensorRead(sensor: Int): Int = if (sensor == SimSensor.BATTERY_MV) 3900 else 20
+        override fun irSend(senderId: Int, led: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) = Unit
     }
 
     @Test
@@ -28,8 +28,8 @@ class FirmwareEngineTest {
     @Test
     fun robotsInterleavedOnOneEngineEachEndAsTheyWouldAlone() {
         val image = RealFirmware.image
-        val a = still(image)
-        val b = still(image)
+        val a = FirmwareInstance(image, Still)
+        val b = FirmwareInstance(image, Still)
         a.init(1)
         b.init(2)
         // b's firmware is called between every two calls of a's, on this thread's one engine.
@@ -38,7 +38,7 @@ class FirmwareEngineTest {
             b.advance(ms * TICKS_PER_MS + 17)
             if (ms % 100 == 0) { a.uartRx(0xC0); b.uartRx(0x00) }
         }
-        val alone = still(image)
+        val alone = FirmwareInstance(image, Still)
         alone.init(1)
         for (ms in 1..1500) {
             alone.advance(ms * TICKS_PER_MS)
@@ -48,7 +48,7 @@ class FirmwareEngineTest {
         assertContentEquals(alone.globals, a.globals, "robot 1's globals (the stack pointer)")
         assertFalse(a.linear.bytes.contentEquals(b.linear.bytes), "robot 2 ran on robot 1's memory")
         // A new robot starts from the image's fresh memory, not from what the engine ran last.
-        assertContentEquals(image.initialMemory, FirmwareInstance(image).linear.bytes)
+        assertContentEquals(image.initialMemory, FirmwareInstance(image, Still).linear.bytes)
     }
 
     private companion object {
