@@ -363,7 +363,6 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     }
 
     public companion object {
-
         /** An emulator of [world] (a name from emulator/worlds) with [robots] robots at the world's start poses. */
         public fun local(robots: Int = 1, world: String = "straight", config: EmulatorConfig = EmulatorConfig()): Emulator =
             Emulator(Worlds.load(world), config).also { emu -> repeat(robots) { emu.addRobot() } }
