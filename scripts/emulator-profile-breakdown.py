@@ -15,11 +15,10 @@ import subprocess
 import sys
 
 CATEGORIES = [  # (category, regex on "Class.method" of the top frame), first match wins
-    ("sensor geometry and inputs (line spots, colour, sensors' values into the firmware's memory)",
-     r"^org\.pocketbot\.emulator\.(world\.Surface|SimRobot\.(sense|computeSpots)|firmware\.FirmwareInstance\.set)"),
-    ("IR between robots and obstacles", r"^org\.pocketbot\.emulator\.SimWorld\.(exchangeIr|deliverTo)|SimRobot\.(afterFirmware|irHeard)|firmware\.FirmwareInstance\.(irOut|clearIrOut)"),
-    ("firmware (wasm under Chicory, incl. the export call glue)",
+    ("firmware (wasm under Chicory, incl. export/host call glue)",
      r"^(org\.pocketbot\.emulator\.firmware\.|com\.dylibso\.chicory\.)"),
+    ("line sensor and colour geometry", r"^org\.pocketbot\.emulator\.(world\.Surface|SimRobot\.(lineAdcSweep|computeSpots|sensorRead))"),
+    ("IR between robots and obstacles", r"^org\.pocketbot\.emulator\.SimWorld\.(exchangeIr|deliverTo)|SimRobot\.(irSend|irHeard)"),
     ("collisions, box contacts, who is alone", r"^org\.pocketbot\.emulator\.(SimWorld\.(separateRobots|checkContacts|resolvePushes|buildGrid|afterStep|markAlone|nearBox)|physics\.Obb)"),
     ("robot physics (motion, encoders, battery)", r"^org\.pocketbot\.emulator\.SimRobot\."),
     ("link model", r"^org\.pocketbot\.emulator\.link\."),
