@@ -11,7 +11,7 @@
 #   make push        thesis A.2: two robots push a heavy box off the track (host-coordinated), simulated time
 #   make track       thesis A.3: three robots on a track, the behaviour in their firmware, simulated time
 #   make emulator    run the emulator CLI, e.g. make emulator ARGS="--robots 3"
-#   make jvm         mvn install of the reactor (no tests), after the firmware wasm
+#   make jvm         mvn install of the reactor (no tests), after the firmware wasm and native engine
 #   make bench | bench-emulator | profile-emulator | bench-sdk | bench-desktop | fuzz | clean
 
 MVN       ?= mvn -B
@@ -42,6 +42,8 @@ FUZZ_TEST           ?= *FuzzTest
 FUZZ_MODULE         ?= sdk/jvm
 
 WASM := firmware/build/wasm/pocketbot.wasm
+# The emulator's native engine, made from that wasm (firmware/native/engine.c); Maven puts it in the emulator's jar.
+NATIVE_ENGINE := $(wildcard firmware/build/native/lib/*/libpocketbot-firmware.so)
 
 # `make run` / `hello` / `emulator` start with plain `java -cp` from the classpath files Maven
 # writes at package time, and rebuild only when a JVM source, pom or the firmware wasm changed.
@@ -63,8 +65,9 @@ deps:
 firmware: deps
 	$(MAKE) -C firmware all
 
+# The firmware as the emulator runs it: the wasm, and the native engine made from it.
 wasm: deps
-	$(MAKE) -C firmware wasm
+	$(MAKE) -C firmware wasm native-engine
 
 protocol-check: deps
 	$(PYTHON) protocol/gen.py --check
@@ -77,16 +80,16 @@ jvm: wasm
 test: deps
 	$(MAKE) --no-print-directory protocol-check
 	$(MAKE) -C firmware test
-	$(MAKE) -C firmware wasm
+	$(MAKE) -C firmware wasm native-engine
 	$(MAVEN) -fae verify
 
 # Packages examples and everything it needs (emulator, sdk); skips tests and the Kotlin/JS gate,
 # which `make test` covers.
-$(RUN_STAMP): $(JVM_INPUTS) $(wildcard $(WASM))
+$(RUN_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl examples -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
-$(PANEL_STAMP): $(JVM_INPUTS) $(wildcard $(WASM))
+$(PANEL_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl desktop-app -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
@@ -102,13 +105,13 @@ EMULATOR_STAMP := emulator/target/classpath.txt
 EMULATOR_INPUTS := $(shell find pom.xml .mvn sdk/protocol sdk/core emulator -name target -prune -o -type f \
                      \( -name '*.kt' -o -name 'pom.xml' -o -name '*.json' -o -name 'jvm.config' \) -print 2>/dev/null)
 
-$(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM))
+$(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
 CLI_STAMP := cli/target/classpath.txt
 
-$(CLI_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(shell find cli -name target -prune -o -type f -print 2>/dev/null)
+$(CLI_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE) $(shell find cli -name target -prune -o -type f -print 2>/dev/null)
 	$(MAVEN) package -pl cli -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 

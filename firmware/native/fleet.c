@@ -7,11 +7,11 @@
  * Per robot and simulated millisecond, as emulator/.../SimRobot.moveAndRun: the motors' first-order lag and the
  * battery, the pose, the encoder edges of both wheels at their interpolated times, the host's bytes at the link's
  * baud rate, all handed over in one sim_run_events call that ends with sim_advance to the step's end, the outputs
- * read from memory, the UART drained at the baud rate (every 8th step: no host attached). The firmware's imports
- * answer as the emulator's do: eight line sensor spots blended over the tape, with the same noise model, the slow
- * sensors, IR messages kept for the step's end. At the step's end the IR messages reach the robots of the same track
- * in range and cone (the bench's tracks are 0.8 m apart, beyond IR range). Single-threaded: what it measures is CPU
- * time per robot-millisecond.
+ * read from memory, the UART drained at the baud rate (every 8th step: no host attached). Before the step it writes
+ * what the sensors face into the firmware's sim_inputs_t, as the emulator does: eight line sensor spots blended over
+ * the tape, the slow sensors, the noise generator's state; after it, it takes the IR messages from sim_ir_out_t. At
+ * the step's end the IR messages reach the robots of the same track in range and cone (the bench's tracks are 0.8 m
+ * apart, beyond IR range). Single-threaded: what it measures is CPU time per robot-millisecond.
  *
  * Usage: fleet ROBOTS WARM_S MEASURE_S TILE_M CX CY RADIUS_M TAPE_W_M AMBIENT X0 Y0 H0 X1 Y1 H1 X2 Y2 H2 FRAME_HEX
  * (the round track of thesis A.3 at (CX, CY) in a TILE_M square, repeated side by side, three robots per track at
@@ -25,6 +25,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "hal/sim/sim_abi.h"
 #include "pocketbot.h"
 
 /* ---- the robot and its world: emulator/.../physics/RobotParams.kt and SimRobot.kt ---------------------------- */
@@ -70,17 +71,12 @@
 #define EVENT_CAPACITY 64
 #define EVENT_UART_RX 0
 #define EVENT_ENCODER_EDGE 1
-enum {
-    SENSOR_BATTERY_MV, SENSOR_CURRENT_MA, SENSOR_MCU_TEMP_DC, SENSOR_ACCEL_X, SENSOR_ACCEL_Y, SENSOR_ACCEL_Z,
-    SENSOR_COLOUR_R, SENSOR_COLOUR_G, SENSOR_COLOUR_B, SENSOR_COLOUR_CLEAR
-};
 
 typedef struct {
     int32_t led, power, len, lo, hi, sender;
 } ir_msg_t;
 
-/* wasm2c passes this to the firmware's imports: one per robot. */
-struct Z_env_instance_t {
+typedef struct {
     Z_pocketbot_instance_t fw;
     int index, track;
     double cx, cy; /* its track's centre */
@@ -88,8 +84,6 @@ struct Z_env_instance_t {
     double phase_l, phase_r;
     double charge_used_mah, current_ma, prev_v, accel_x, accel_y;
     double spot_dark[8];
-    int spots_valid, colour_valid;
-    double colour[3];
     uint64_t rng;
     int tx_steps;
     double tx_credit;
@@ -102,9 +96,8 @@ struct Z_env_instance_t {
     int ir_out_count;
     int32_t ir_in[IR_CAP][7];
     int ir_in_count;
-    uint32_t outputs, events;
-};
-typedef struct Z_env_instance_t robot_t;
+    uint32_t outputs, events, inputs, sent; /* addresses of sim_outputs_t, the event buffer, sim_inputs_t, sim_ir_out_t */
+} robot_t;
 
 static double tape_r, tape_hw, ambient;
 static double alpha_lag; /* 1 - exp(-STEP_S / MOTOR_TAU) */
@@ -115,14 +108,6 @@ static uint64_t next_random(robot_t *r) /* splitmix64 */
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return z ^ (z >> 31);
-}
-
-/* Irwin-Hall of four 16-bit uniforms, as SimRobot.gauss(). */
-static double gauss(robot_t *r)
-{
-    uint64_t v = next_random(r);
-    double sum = (double)((v & 0xFFFF) + ((v >> 16) & 0xFFFF) + ((v >> 32) & 0xFFFF) + (v >> 48));
-    return (sum - 131070.0) * (1.0 / (65536.0 * sqrt(4.0 / 12.0)));
 }
 
 static double uniform(robot_t *r)
@@ -156,28 +141,6 @@ static void compute_spots(robot_t *r)
         double lat = (3.5 - j) * SPOT_PITCH; /* spot 0 is the leftmost */
         r->spot_dark[j] = coverage(r, r->x + LINE_AHEAD * c - lat * s, r->y + LINE_AHEAD * s + lat * c, SPOT_RADIUS);
     }
-    r->spots_valid = 1;
-}
-
-/* ---- the firmware's imports (sim_abi.h) ----------------------------------------------------------------------- */
-
-u64 Z_envZ_line_adc_sweep(robot_t *r, u32 emitters)
-{
-    int lit = (int)(emitters & 0x1F);
-    if (lit && !r->spots_valid)
-        compute_spots(r);
-    uint64_t sweep = 0;
-    for (int d = 0; d < 4; d++) {
-        double v = ambient;
-        if (lit & (1 << d))
-            v += LINE_WHITE + (LINE_BLACK - LINE_WHITE) * r->spot_dark[2 * d];
-        if (lit & (1 << (d + 1)))
-            v += LINE_WHITE + (LINE_BLACK - LINE_WHITE) * r->spot_dark[2 * d + 1];
-        v += gauss(r) * LINE_NOISE;
-        int32_t a = (int32_t)v;
-        sweep |= (uint64_t)(a < 0 ? 0 : a > 4095 ? 4095 : a) << (16 * d);
-    }
-    return sweep;
 }
 
 static int32_t clamp_i(int32_t v, int32_t lo, int32_t hi)
@@ -185,40 +148,48 @@ static int32_t clamp_i(int32_t v, int32_t lo, int32_t hi)
     return v < lo ? lo : v > hi ? hi : v;
 }
 
-u32 Z_envZ_sensor_read(robot_t *r, u32 sensor)
+/* ---- what the sensors face, into the firmware's sim_inputs_t; the IR it sent, out of sim_ir_out_t ------------------ */
+
+static sim_inputs_t *inputs_of(robot_t *r)
 {
-    switch (sensor) {
-    case SENSOR_BATTERY_MV: return (u32)(int32_t)(battery_loaded_v(r) * 1000 + gauss(r) * 3);
-    case SENSOR_CURRENT_MA: return (u32)(int32_t)r->current_ma;
-    case SENSOR_MCU_TEMP_DC: return (u32)(int32_t)(250 + r->current_ma / 20);
-    case SENSOR_ACCEL_X: return (u32)clamp_i((int32_t)(r->accel_x + gauss(r) * 8), -16000, 16000);
-    case SENSOR_ACCEL_Y: return (u32)clamp_i((int32_t)(r->accel_y + gauss(r) * 8), -16000, 16000);
-    case SENSOR_ACCEL_Z: return (u32)(int32_t)(1000 + gauss(r) * 8);
-    case SENSOR_COLOUR_R: case SENSOR_COLOUR_G: case SENSOR_COLOUR_B: case SENSOR_COLOUR_CLEAR: {
-        if (!r->colour_valid) {
-            double c = coverage(r, r->x + COLOUR_AHEAD * cos(r->theta), r->y + COLOUR_AHEAD * sin(r->theta), COLOUR_RADIUS);
-            r->colour[0] = r->colour[1] = 235 + (18 - 235) * c; /* white floor, black tape */
-            r->colour[2] = 235 + (20 - 235) * c;
-            r->colour_valid = 1;
-        }
-        double v = sensor == SENSOR_COLOUR_CLEAR ? (r->colour[0] + r->colour[1] + r->colour[2]) / 3 : r->colour[sensor - SENSOR_COLOUR_R];
-        return (u32)clamp_i((int32_t)(v + gauss(r) * 2), 0, 255);
-    }
-    default: return 0;
-    }
+    return (sim_inputs_t *)(r->fw.w2c_memory.data + r->inputs);
 }
 
-void Z_envZ_ir_send(robot_t *r, u32 sender, u32 led, u32 power, u32 len, u32 lo, u32 hi)
+static void sense(robot_t *r)
 {
-    if (r->ir_out_count == IR_CAP)
-        return;
-    ir_msg_t *m = &r->ir_out[r->ir_out_count++];
-    m->sender = (int32_t)sender;
-    m->led = (int32_t)led;
-    m->power = clamp_i((int32_t)power, 0, 100);
-    m->len = clamp_i((int32_t)len, 0, 8);
-    m->lo = (int32_t)lo;
-    m->hi = (int32_t)hi;
+    sim_inputs_t *in = inputs_of(r);
+    compute_spots(r);
+    double c = coverage(r, r->x + COLOUR_AHEAD * cos(r->theta), r->y + COLOUR_AHEAD * sin(r->theta), COLOUR_RADIUS);
+    double rg = 235 + (18 - 235) * c, b = 235 + (20 - 235) * c; /* white floor, black tape */
+    in->noise_state = r->rng;
+    in->noise = 1;
+    memcpy(in->line_dark, r->spot_dark, sizeof in->line_dark);
+    in->sensor[SIM_SENSOR_BATTERY_MV] = battery_loaded_v(r) * 1000;
+    in->sensor[SIM_SENSOR_CURRENT_MA] = r->current_ma;
+    in->sensor[SIM_SENSOR_MCU_TEMP_DC] = 250 + r->current_ma / 20;
+    in->sensor[SIM_SENSOR_ACCEL_X_MG] = r->accel_x;
+    in->sensor[SIM_SENSOR_ACCEL_Y_MG] = r->accel_y;
+    in->sensor[SIM_SENSOR_ACCEL_Z_MG] = 1000;
+    in->sensor[SIM_SENSOR_COLOUR_R] = rg;
+    in->sensor[SIM_SENSOR_COLOUR_G] = rg;
+    in->sensor[SIM_SENSOR_COLOUR_B] = b;
+    in->sensor[SIM_SENSOR_COLOUR_CLEAR] = (rg + rg + b) / 3;
+}
+
+static void take_ir(robot_t *r)
+{
+    sim_ir_out_t *out = (sim_ir_out_t *)(r->fw.w2c_memory.data + r->sent);
+    for (int i = 0; i < out->count && r->ir_out_count < IR_CAP; i++) {
+        const sim_ir_msg_t *m = &out->msg[i];
+        ir_msg_t *o = &r->ir_out[r->ir_out_count++];
+        o->sender = m->sender_id;
+        o->led = m->led;
+        o->power = clamp_i(m->power, 0, 100);
+        o->len = clamp_i(m->len, 0, 8);
+        o->lo = m->payload_lo;
+        o->hi = m->payload_hi;
+    }
+    out->count = 0;
 }
 
 /* ---- one robot's millisecond ---------------------------------------------------------------------------------- */
@@ -304,8 +275,7 @@ static void step(robot_t *r, int64_t t0)
         r->edge_t[j + 1] = t;
         r->edge_w[j + 1] = w;
     }
-    r->spots_valid = 0;
-    r->colour_valid = 0;
+    sense(r);
     /* IR heard at the end of the previous step. */
     for (int k = 0; k < r->ir_in_count; k++) {
         int32_t *m = r->ir_in[k];
@@ -332,6 +302,8 @@ static void step(robot_t *r, int64_t t0)
         }
     }
     Z_pocketbotZ_sim_run_events(&r->fw, (u32)queued, (u64)t1);
+    r->rng = inputs_of(r)->noise_state;
+    take_ir(r);
     /* Outputs. */
     const uint8_t *out = r->fw.w2c_memory.data + r->outputs;
     int16_t pwm_l, pwm_r;
@@ -451,9 +423,17 @@ int main(int argc, char **argv)
         r->host_bytes = frame;
         r->host_count = (int)frame_len;
         r->host_t0 = LATENCY_TICKS;
-        Z_pocketbot_instantiate(&r->fw, r);
+        Z_pocketbot_instantiate(&r->fw);
         r->outputs = Z_pocketbotZ_sim_outputs(&r->fw);
         r->events = Z_pocketbotZ_sim_events(&r->fw);
+        r->inputs = Z_pocketbotZ_sim_inputs(&r->fw);
+        r->sent = Z_pocketbotZ_sim_ir_out(&r->fw);
+        sim_inputs_t *in = inputs_of(r);
+        in->line_ambient_adc = ambient;
+        in->line_white_adc = LINE_WHITE;
+        in->line_span_adc = LINE_BLACK - LINE_WHITE;
+        in->line_noise_adc = LINE_NOISE;
+        sense(r);
         Z_pocketbotZ_sim_init(&r->fw, (u32)(i % 254 + 1));
         Z_pocketbotZ_sim_advance(&r->fw, 0);
     }

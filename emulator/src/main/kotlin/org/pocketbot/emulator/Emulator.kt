@@ -1,5 +1,6 @@
 package org.pocketbot.emulator
 
+import org.pocketbot.emulator.firmware.FirmwareEngine
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.internal.ParallelStepper
 import org.pocketbot.emulator.physics.RobotParams
@@ -96,8 +97,12 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     @Volatile private var paused = false
     @Volatile public var speed: Speed = Speed.Realtime(1.0)
     @Volatile private var controlPort: ControlPort? = null
+    private var closed = false // guarded by lock
 
     public val world: World get() = sim.spec
+
+    /** What runs the robots' firmware (see [FirmwareImage.compiled]). */
+    public val firmwareEngine: FirmwareEngine get() = image.engine
 
     /** Simulated time since the start, in 32 MHz ticks. */
     public val timeTicks: Long get() = synchronized(lock) { nowTicks }
@@ -257,13 +262,13 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
             val sp = speed
             if (wasPaused || sp != lastSpeed) { wallStart = clock.nanoTime(); simStart = timeTicks; lastSpeed = sp; wasPaused = false }
             when (sp) {
-                Speed.AsFastAsPossible -> synchronized(lock) { modes.pace = 0.0; runLocked(20) }
+                Speed.AsFastAsPossible -> synchronized(lock) { if (!closed) { modes.pace = 0.0; runLocked(20) } }
                 is Speed.Realtime -> {
                     val elapsedNs = clock.nanoTime() - wallStart
                     val target = simStart + (elapsedNs * sp.factor * SimTime.TICKS_PER_SECOND / 1e9).toLong()
                     val behind = (target - timeTicks) / SimTime.STEP_TICKS
                     if (behind <= 0) clock.sleep(1)
-                    else synchronized(lock) { modes.pace = sp.factor; runLocked(minOf(behind, 200L).toInt()) }
+                    else synchronized(lock) { if (!closed) { modes.pace = sp.factor; runLocked(minOf(behind, 200L).toInt()) } }
                 }
             }
         }
@@ -348,7 +353,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         for (r in sim.robots) {
             put(r.x, r.y, r.theta, r.distL, r.distR, r.vl, r.vr)
             val mem = r.firmware.memory
-            md.update(mem.readBytes(0, mem.pages() * 65536))
+            md.update(mem.readBytes(0, mem.size))
             buf.clear(); buf.putLong(r.link.bytesToHost); buf.putLong(r.link.bytesToHostCrc); md.update(buf.array(), 0, 16)
         }
         for (b in sim.boxes) put(b.x, b.y)
@@ -359,6 +364,11 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         stop()
         stopTcp()
         for (h in robots) h.sim.link.dropConnection("emulator closed")
+        // Under the lock: a loop thread that outlived stop()'s wait is between steps when the firmware goes.
+        synchronized(lock) {
+            closed = true
+            for (r in sim.robots) r.firmware.close()
+        }
         stepper.close()
     }
 

@@ -1,5 +1,6 @@
 package org.pocketbot.emulator
 
+import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.link.LinkSettings
 import org.pocketbot.emulator.world.Box
@@ -36,10 +37,11 @@ class DeterminismAndFaultsTest {
     }
 
     @Test
-    fun `a fleet stepped on one thread or on several gives the same state hash`() {
-        fun hash(threads: Int) = Emulator(
+    fun `a fleet gives the same state hash on one thread or two, its firmware run natively or by Chicory`() {
+        // 24 robots on the round track, close enough to hear each other's IR and to collide.
+        fun hash(image: FirmwareImage, threads: Int) = Emulator(
             org.pocketbot.emulator.world.Worlds.load("round"),
-            EmulatorConfig(seed = 11, firmware = RealFirmware.image, threads = threads, parallelFrom = 1),
+            EmulatorConfig(seed = 11, firmware = image, threads = threads, parallelFrom = 1),
         ).use { emu ->
             val hosts = List(24) { k ->
                 val a = Math.toRadians(k * 15.0)
@@ -50,7 +52,10 @@ class DeterminismAndFaultsTest {
             hosts.forEach { it.close() }
             emu.stateHash()
         }
-        assertEquals(hash(1), hash(2))
+        val native = hash(RealFirmware.native, 1)
+        assertEquals(native, hash(RealFirmware.native, 2), "native, two threads against one")
+        assertEquals(native, hash(RealFirmware.chicory, 1), "Chicory against native, one thread")
+        assertEquals(native, hash(RealFirmware.chicory, 2), "Chicory against native, two threads")
     }
 
     @Test

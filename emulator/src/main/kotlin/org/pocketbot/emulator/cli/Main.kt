@@ -63,7 +63,7 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         val host = ListenAddress.hostText(reachable.first())
         val where = if (listen.isLoopbackAddress) "" else
             ", on the network at ${reachable.joinToString { ListenAddress.hostText(it) }} (anyone there can drive these robots)"
-        println("PocketBot emulator: world ${w.name}, $robots robot(s), seed $seed, speed ${describe(pace)}$where")
+        println("PocketBot emulator: world ${w.name}, $robots robot(s), seed $seed, speed ${describe(pace)}, firmware ${emu.firmwareEngine.name.lowercase()}$where")
         for (r in emu.robots) println("robot ${r.id} ${r.name} tcp $host:${r.tcpPort}")
         if (control >= 0) println("control $host:$control")
         System.out.flush()
