@@ -1,6 +1,9 @@
 # PocketBot top-level build: make drives the firmware (C) and Maven (every JVM module).
 #
-#   make test        everything CI runs: deps, protocol check, firmware tests, mvn verify
+#   make test        everything CI runs: deps, protocol check, firmware tests, every Maven module's tests (the
+#                    libraries then deployed to target/repository), then samples/outside built and run against them
+#   make publish     the libraries as a Maven repository folder: $(PUBLISH_REPO) (PUBLISH_REPO=/other/dir)
+#   make docs        the libraries' API docs (Dokka HTML): target/docs/index.html
 #   make run         the control panel with an embedded emulator fleet; without a display, HelloRobot and the
 #                    headless fleet demo ($(RUN_MAIN)) instead
 #   make cli         builds the `pocketbot` command line: cli/target/pocketbot
@@ -11,7 +14,7 @@
 #   make push        thesis A.2: two robots push a heavy box off the track (host-coordinated), simulated time
 #   make track       thesis A.3: three robots on a track, the behaviour in their firmware, simulated time
 #   make emulator    run the emulator CLI, e.g. make emulator ARGS="--robots 3"
-#   make jvm         mvn install of the reactor (no tests), after the firmware wasm and native engine
+#   make jvm         mvn package of the reactor (no tests), after the firmware wasm and native engine
 #   make bench | bench-emulator | profile-emulator | bench-sdk | bench-desktop | fuzz | clean
 
 MVN       ?= mvn -B
@@ -45,17 +48,23 @@ WASM := firmware/build/wasm/pocketbot.wasm
 # The emulator's native engine, made from that wasm (firmware/native/engine.c); Maven puts it in the emulator's jar.
 NATIVE_ENGINE := $(wildcard firmware/build/native/lib/*/libpocketbot-firmware.so)
 
+# The published libraries (and their parent POM and BOM), and the folder `make publish` deploys them to: a Maven
+# repository on disk, never ~/.m2 (install is skipped; the local repository is shared with other builds).
+LIBRARIES     := library,library/bom,sdk/protocol,sdk/core,sdk/jvm,emulator,emulator/simulated
+PUBLISH_REPO  ?= target/repository
+publish_to     = -Dmaven.install.skip=true -DaltDeploymentRepository=pocketbot::file://$(abspath $(1))
+
 # `make run` / `hello` / `emulator` start with plain `java -cp` from the classpath files Maven
 # writes at package time, and rebuild only when a JVM source, pom or the firmware wasm changed.
-JVM_INPUTS := $(shell find pom.xml .mvn sdk emulator examples desktop-app -name target -prune -o -type f \
+JVM_INPUTS := $(shell find pom.xml .mvn library sdk emulator examples desktop-app -name target -prune -o -type f \
                 \( -name '*.kt' -o -name '*.java' -o -name 'pom.xml' -o -name '*.json' \
                    -o -name 'jvm.config' -o -path '*/src/main/resources/*' \) -print 2>/dev/null)
 RUN_STAMP  := examples/target/classpath.txt
 PANEL_STAMP := desktop-app/target/classpath.txt
 cp_of       = $(1)/target/classes:$$(cat $(1)/target/classpath.txt)
 
-.PHONY: all deps firmware wasm protocol-check jvm test run hello push track emulator cli panel screenshots apk \
-        bench bench-emulator profile-emulator bench-sdk bench-desktop fuzz clean
+.PHONY: all deps firmware wasm protocol-check jvm test publish docs outside-sample run hello push track emulator cli \
+        panel screenshots apk bench bench-emulator profile-emulator bench-sdk bench-desktop fuzz clean
 
 all: jvm
 
@@ -73,7 +82,7 @@ protocol-check: deps
 	$(PYTHON) protocol/gen.py --check
 
 jvm: wasm
-	$(MAVEN) install -DskipTests
+	$(MAVEN) package -DskipTests
 
 # Sequential on purpose (also under make -j): cheap checks first, the long Maven build last.
 # -fae: a failing module still lets the independent ones run, so the log has every count.
@@ -81,7 +90,23 @@ test: deps
 	$(MAKE) --no-print-directory protocol-check
 	$(MAKE) -C firmware test
 	$(MAKE) -C firmware wasm native-engine
-	$(MAVEN) -fae verify
+	rm -rf target/repository
+	$(MAVEN) -fae deploy $(call publish_to,target/repository)
+	$(MAKE) --no-print-directory outside-sample PUBLISH_REPO=target/repository
+
+# The libraries without their tests (`make test` runs them, and publishes in the same Maven run).
+publish: wasm
+	$(MAVEN) deploy -pl $(LIBRARIES) -am -Dmaven.test.skip=true -Dpocketbot.jsgate.skip=true $(call publish_to,$(PUBLISH_REPO))
+	@echo "published to $(PUBLISH_REPO):"; cd $(PUBLISH_REPO) && find org -name '*.pom' -o -name '*.jar' | sort
+
+# A program outside the reactor (its own POM, no parent) built against $(PUBLISH_REPO) alone, plus Central.
+outside-sample:
+	bash samples/outside/build-and-run.sh $(abspath $(PUBLISH_REPO))
+
+# One site for all libraries (library/docs), without the per-library docs and jars `make publish` makes.
+docs: wasm
+	$(MAVEN) package -pl library/docs -am -Dmaven.test.skip=true -Dpocketbot.jsgate.skip=true -Dpocketbot.publish.skip=true
+	@echo "API reference: target/docs/index.html"
 
 # Packages examples and everything it needs (emulator, sdk); skips tests and the Kotlin/JS gate,
 # which `make test` covers.
@@ -102,11 +127,16 @@ run: wasm
 	  $(JAVA) -cp "$(call cp_of,examples)" $(RUN_MAIN) $(ARGS); fi
 
 EMULATOR_STAMP := emulator/target/classpath.txt
-EMULATOR_INPUTS := $(shell find pom.xml .mvn sdk/protocol sdk/core emulator -name target -prune -o -type f \
+EMULATOR_CLI_STAMP := emulator/cli/target/classpath.txt
+EMULATOR_INPUTS := $(shell find pom.xml .mvn library sdk/protocol sdk/core emulator -name target -prune -o -type f \
                      \( -name '*.kt' -o -name 'pom.xml' -o -name '*.json' -o -name 'jvm.config' \) -print 2>/dev/null)
 
 $(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true
+	@touch $@
+
+$(EMULATOR_CLI_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
+	$(MAVEN) package -pl emulator/cli -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
 CLI_STAMP := cli/target/classpath.txt
@@ -152,8 +182,8 @@ track: wasm
 	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,examples)" $(TRACK_MAIN) $(ARGS)
 
 emulator: wasm
-	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
-	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(EMULATOR_MAIN) $(ARGS)
+	@$(MAKE) --no-print-directory $(EMULATOR_CLI_STAMP)
+	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator/cli)" $(EMULATOR_MAIN) $(ARGS)
 
 bench: bench-emulator bench-sdk bench-desktop
 	$(MAKE) -C firmware bench
@@ -163,11 +193,14 @@ bench-emulator: wasm
 	$(MAKE) -C firmware native-fleet
 	$(JAVA) -XX:-DontCompileHugeMethods -Dpocketbot.bench.native=firmware/build/native/fleet -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
 
-# Where a robot-millisecond goes: the emulator benchmark under Java Flight Recorder (1 ms CPU samples), then the
-# samples by category (firmware, line sensor geometry, IR, collisions, physics, link, stepping). ARGS: fleet sizes.
+# Where a robot-millisecond goes: the emulator benchmark under Java Flight Recorder (1 ms CPU samples, Java and native
+# code), then the samples by category (firmware, line sensor geometry, IR, collisions, physics, link, stepping).
+# ARGS: fleet sizes; PROFILE_ENGINE: native or chicory. One stepping thread: JFR samples one thread in native code a period.
+PROFILE_ENGINE ?= native
 profile-emulator: wasm
 	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
-	$(JAVA) -XX:-DontCompileHugeMethods "-XX:StartFlightRecording=filename=emulator/target/emulator-profile.jfr,settings=profile,jdk.ExecutionSample#period=1ms" \
+	$(JAVA) -XX:-DontCompileHugeMethods "-XX:StartFlightRecording=filename=emulator/target/emulator-profile.jfr,settings=profile,jdk.ExecutionSample#period=1ms,jdk.NativeMethodSample#period=1ms" \
+	  -Dpocketbot.bench.engines=$(PROFILE_ENGINE) -Dpocketbot.bench.threads=1 \
 	  -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(or $(ARGS),1000)
 	PATH="$$(dirname $$(readlink -f $$(command -v $(JAVA))))":$$PATH $(PYTHON) scripts/emulator-profile-breakdown.py emulator/target/emulator-profile.jfr
 
@@ -186,4 +219,5 @@ fuzz: wasm
 
 clean:
 	$(MVN) $(MVN_FLAGS) clean
+	rm -rf samples/outside/target
 	-$(MAKE) -C firmware clean

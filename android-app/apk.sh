@@ -4,15 +4,24 @@
 #   apk.sh resources                      aapt2: res/ and the manifest -> $BUILD_DIR/resources.ap_ (+ R8 keep rules)
 #   apk.sh package CLASSES CLASSPATH      R8 -> dex, the APK, zipalign, a debug signature, then its checks
 #
-# Environment (set by the pom): ANDROID_JAR (android-all of API 34: the platform to link and compile against),
-# R8_JAR, BUILD_DIR, JAVA, VERSION_NAME. The output is $BUILD_DIR/pocketbot.apk.
+# Environment (set by the pom): ANDROID_JAR (android-all of API 35: the platform to link and compile against),
+# R8_JAR, BUILD_DIR, JAVA, VERSION_NAME (the project version). The output is $BUILD_DIR/pocketbot.apk.
+#
+# Signing (android-app/README.md): with POCKETBOT_KEYSTORE set, the release key in it (POCKETBOT_KEY_ALIAS,
+# passwords in POCKETBOT_KEYSTORE_PASSWORD and POCKETBOT_KEY_PASSWORD, read from the environment by apksigner);
+# otherwise the debug key in POCKETBOT_DEBUG_KEYSTORE, by default ~/.android/debug.keystore (where the Android SDK
+# keeps it), made once if missing. Either stays the same across `mvn clean`, so a build installs over the last one.
 set -euo pipefail
 
 HERE="$(cd "$(dirname "$0")" && pwd)"
 MIN_SDK=26
-TARGET_SDK=34
+TARGET_SDK=35
 PACKAGE=org.pocketbot.android
 APK="$BUILD_DIR/pocketbot.apk"
+# MAJOR.MINOR.PATCH[-QUALIFIER] -> MAJOR*1000000 + MINOR*1000 + PATCH: every release has a higher code than the ones
+# before it, so Android installs it as an update (a -SNAPSHOT has its release's code: it installs over it with -r).
+[[ "$VERSION_NAME" =~ ^([0-9]+)\.([0-9]+)\.([0-9]+)(-.*)?$ ]] || { echo "apk.sh: version $VERSION_NAME is not MAJOR.MINOR.PATCH" >&2; exit 1; }
+VERSION_CODE=$((BASH_REMATCH[1] * 1000000 + BASH_REMATCH[2] * 1000 + BASH_REMATCH[3]))
 # R8 on C1 only: it runs once per build, so C2's warm-up never pays off (about 2x faster on 2 cores).
 R8=("$JAVA" -XX:TieredStopAtLevel=1 -XX:+UseParallelGC -Xmx2g -cp "$R8_JAR")
 
@@ -21,12 +30,16 @@ fail() { echo "apk.sh: $*" >&2; exit 1; }
 resources() {
   mkdir -p "$BUILD_DIR"
   aapt2 compile --dir "$HERE/src/main/res" -o "$BUILD_DIR/res.zip"
-  aapt2 link -o "$BUILD_DIR/resources.ap_" -I "$ANDROID_JAR" \
+  # Debian's aapt2 (Android 10) cannot read API 35's framework table (compact entries, 16-bit offsets): it links
+  # against the same table rewritten in the older encoding (tools/arsc-compat.py).
+  local platform="$BUILD_DIR/android-$TARGET_SDK-resources.jar"
+  [ "$platform" -nt "$ANDROID_JAR" ] || python3 "$HERE/tools/arsc-compat.py" "$ANDROID_JAR" "$platform"
+  aapt2 link -o "$BUILD_DIR/resources.ap_" -I "$platform" \
     --manifest "$HERE/src/main/AndroidManifest.xml" \
     --min-sdk-version "$MIN_SDK" --target-sdk-version "$TARGET_SDK" \
-    --version-code 1 --version-name "$VERSION_NAME" \
+    --version-code "$VERSION_CODE" --version-name "$VERSION_NAME" \
     --proguard "$BUILD_DIR/aapt-rules.pro" \
-    "$BUILD_DIR/res.zip" 2> >(grep -v "Unknown chunk type" >&2) # Debian's aapt2 (Android 10) skips API 34 chunks it need not read
+    "$BUILD_DIR/res.zip" 2> >(grep -v "Unknown chunk type" >&2) # chunks newer than Android 10 it need not read
 }
 
 package() {
@@ -57,6 +70,9 @@ package() {
   done
 
   local unsigned="$BUILD_DIR/unsigned.apk" aligned="$BUILD_DIR/aligned.apk"
+  # The last build, to check that this one installs over it.
+  rm -f "$BUILD_DIR/previous.apk"
+  [ -f "$APK" ] && mv "$APK" "$BUILD_DIR/previous.apk"
   cp "$BUILD_DIR/resources.ap_" "$unsigned"
   (cd "$BUILD_DIR/dex" && aapt add "$unsigned" classes*.dex >/dev/null)
   if [ -d "$BUILD_DIR/meta/META-INF/services" ]; then
@@ -64,15 +80,8 @@ package() {
   fi
   zipalign -p -f 4 "$unsigned" "$aligned"
 
-  # A debug key made here, for this checkout (never committed): reinstalling over an APK signed with another key
-  # needs `adb uninstall org.pocketbot.android` first.
-  local keystore="$BUILD_DIR/debug.keystore"
-  if [ ! -f "$keystore" ]; then
-    keytool -genkeypair -keystore "$keystore" -storepass android -keypass android -alias androiddebugkey \
-      -keyalg RSA -keysize 2048 -validity 10000 -dname "CN=PocketBot Debug,O=PocketBot,C=US" >/dev/null 2>&1 \
-      || fail "keytool could not make the debug key"
-  fi
-  apksigner sign --ks "$keystore" --ks-pass pass:android --key-pass pass:android --ks-key-alias androiddebugkey \
+  signing_key
+  apksigner sign --ks "$KEYSTORE" --ks-key-alias "$KEY_ALIAS" --ks-pass "env:$STORE_PASS_VAR" --key-pass "env:$KEY_PASS_VAR" \
     --out "$APK" "$aligned"
   rm -f "$unsigned" "$aligned" "$APK.idsig"
 
@@ -80,15 +89,47 @@ package() {
   echo "apk.sh: $APK: $(stat -c %s "$APK") bytes, $(method_count) dex methods, built in $((SECONDS - started)) s"
 }
 
-# The APK checks itself: a valid signature, the manifest as meant, and only the platform API it is allowed to use.
+# The key to sign with: KEYSTORE, KEY_ALIAS, and the names of the variables holding the passwords.
+signing_key() {
+  if [ -n "${POCKETBOT_KEYSTORE:-}" ]; then
+    KEYSTORE="$POCKETBOT_KEYSTORE" KEY_ALIAS="${POCKETBOT_KEY_ALIAS:?POCKETBOT_KEY_ALIAS names the release key}"
+    STORE_PASS_VAR=POCKETBOT_KEYSTORE_PASSWORD KEY_PASS_VAR=POCKETBOT_KEY_PASSWORD
+    [ -f "$KEYSTORE" ] || fail "POCKETBOT_KEYSTORE: no keystore at $KEYSTORE"
+    [ -n "${POCKETBOT_KEYSTORE_PASSWORD:-}" ] || fail "POCKETBOT_KEYSTORE_PASSWORD is not set"
+    export POCKETBOT_KEY_PASSWORD="${POCKETBOT_KEY_PASSWORD:-$POCKETBOT_KEYSTORE_PASSWORD}"
+  else
+    # The Android SDK's debug key (alias, passwords and name as Android Studio makes it).
+    KEYSTORE="${POCKETBOT_DEBUG_KEYSTORE:-$HOME/.android/debug.keystore}" KEY_ALIAS=androiddebugkey
+    STORE_PASS_VAR=DEBUG_PASS KEY_PASS_VAR=DEBUG_PASS
+    export DEBUG_PASS=android
+    if [ ! -f "$KEYSTORE" ]; then
+      mkdir -p "$(dirname "$KEYSTORE")"
+      keytool -genkeypair -keystore "$KEYSTORE" -storepass android -keypass android -alias androiddebugkey \
+        -keyalg RSA -keysize 2048 -validity 10950 -dname "CN=Android Debug,O=Android,C=US" >/dev/null 2>&1 \
+        || fail "keytool could not make the debug key at $KEYSTORE"
+      echo "apk.sh: made the debug key $KEYSTORE: keep it, builds signed with another key do not install over these"
+    fi
+  fi
+}
+
+# SHA-256 of the certificate that signed APK $1.
+signer() {
+  apksigner verify --print-certs "$1" | sed -n 's/^Signer #1 certificate SHA-256 digest: //p'
+}
+
+# The APK checks itself: a valid signature by the key meant, the manifest and version as meant, that it installs over
+# the previous build, and only the platform API it is allowed to use.
 check() {
   apksigner verify --verbose "$APK" >"$BUILD_DIR/apksigner.txt" || fail "apksigner verify failed: $(cat "$BUILD_DIR/apksigner.txt")"
   grep -q "Verified using v2 scheme (APK Signature Scheme v2): true" "$BUILD_DIR/apksigner.txt" \
     || fail "not signed with APK Signature Scheme v2: $(cat "$BUILD_DIR/apksigner.txt")"
+  local key
+  key=$(keytool -exportcert -keystore "$KEYSTORE" -alias "$KEY_ALIAS" -storepass:env "$STORE_PASS_VAR" | sha256sum | cut -d' ' -f1)
+  [ "$(signer "$APK")" = "$key" ] || fail "the APK is not signed by $KEY_ALIAS in $KEYSTORE"
 
   aapt2 dump badging "$APK" >"$BUILD_DIR/badging.txt" 2>&1 || fail "aapt2 dump badging failed: $(cat "$BUILD_DIR/badging.txt")"
   local want=(
-    "package: name='$PACKAGE'"
+    "package: name='$PACKAGE' versionCode='$VERSION_CODE' versionName='$VERSION_NAME'"
     "sdkVersion:'$MIN_SDK'"
     "targetSdkVersion:'$TARGET_SDK'"
     "uses-permission: name='android.permission.BLUETOOTH_SCAN'"
@@ -98,14 +139,17 @@ check() {
     "uses-permission: name='android.permission.ACCESS_FINE_LOCATION' maxSdkVersion='30'"
     "uses-permission: name='android.permission.INTERNET'"
     "uses-permission: name='android.permission.FOREGROUND_SERVICE_CONNECTED_DEVICE'"
+    "uses-permission: name='android.permission.POST_NOTIFICATIONS'"
     "launchable-activity: name='$PACKAGE.MainActivity'"
   )
   for line in "${want[@]}"; do
     grep -qF "$line" "$BUILD_DIR/badging.txt" || fail "aapt2 dump badging lacks \"$line\":
 $(cat "$BUILD_DIR/badging.txt")"
   done
+  ! grep -q "application-debuggable" "$BUILD_DIR/badging.txt" || fail "the APK is debuggable"
+  installs_over_previous
 
-  # Every class, method and field the dex uses exists: in Android 14's android-all (android.*) or the JDK (java.*:
+  # Every class, method and field the dex uses exists: in Android 15's android-all (android.*) or the JDK (java.*:
   # android-all leaves those to the JVM Robolectric runs on). A library the APK lacks fails here ...
   local jdk="${JAVA%/bin/java}"
   "${R8[@]}" com.android.tools.r8.tracereferences.TraceReferences --check --lib "$ANDROID_JAR" --lib "$jdk" \
@@ -131,6 +175,22 @@ SDK reference (developer.android.com: public, and present at minSdk $MIN_SDK or 
 update the list with POCKETBOT_API_UPDATE=1 make apk:
 $(cat "$BUILD_DIR/platform-api.diff")"
     fi
+  fi
+}
+
+# Android installs an APK over an installed one of the same package only when it has the same signer and a version
+# code not lower: checked against the build this one replaced in target/, if there was one.
+installs_over_previous() {
+  local previous="$BUILD_DIR/previous.apk"
+  [ -f "$previous" ] || return 0
+  local code_was
+  code_was=$(aapt2 dump badging "$previous" 2>/dev/null | sed -n "s/^package: .* versionCode='\([0-9]*\)'.*/\1/p")
+  [ "${code_was:-0}" -le "$VERSION_CODE" ] || fail "version code $VERSION_CODE is lower than the previous build's $code_was"
+  if [ "$(signer "$previous")" = "$(signer "$APK")" ]; then
+    echo "apk.sh: installs over the previous build (version code $code_was -> $VERSION_CODE, the same signer)"
+  else
+    # Switching keys (debug to release) is a choice, not a build error; the user must know what it costs.
+    echo "apk.sh: WARNING: signed with another key than the previous build: a phone with that one must uninstall it first" >&2
   fi
 }
 

@@ -91,6 +91,13 @@ worlds.append(world("track", "Thesis A.3, multiple robots on a track: the round 
                     0.8, 0.8, [arc(0.4, 0.4, R)], [on_circle(0.4, 0.4, R, a) for a in (-90, 30, 150)],
                     [{"center": p(0.4, 0.4 + R), "widthM": 0.04, "heightM": 0.04, "angleDeg": 0.0, "massKg": 1.0, "friction": 0.25, "movable": False}]))
 
+# An open floor for programs that drive freely (movements, odometry): no tape, a 4 x 4 grid of start poses.
+PITCH = 0.45
+worlds.append(world("open", "An open floor without tape (2 x 2 m) for programs that drive freely: 16 start poses 0.45 m apart "
+                    "in a 4 x 4 grid, all facing +x, row by row from the bottom left; a square of up to 0.3 m driven "
+                    "to the left from any of them stays clear of the others.",
+                    2.0, 2.0, [], [pose(0.3 + PITCH * (i % 4), 0.3 + PITCH * (i // 4), 0) for i in range(16)]))
+
 for wd in worlds:
     with open(os.path.join(HERE, wd["name"] + ".json"), "w") as f:
         json.dump(wd, f, indent=2)

@@ -69,7 +69,7 @@ def kt_write(f, expr, typed=False):
 
 
 def kt_doc_line(model, f):
-    unit = f" [{f.unit}]" if f.unit else ""
+    unit = f", in {f.unit}" if f.unit else ""  # not "[ms]": KDoc would read a link to a declaration "ms"
     enum = f" (see [{camel(f.enum, True)}])" if f.enum else ""
     flags = f" (bits: [{camel(f.flags, True)}])" if f.flags else ""
     return f"/** {f.doc}{unit}{enum}{flags} */"

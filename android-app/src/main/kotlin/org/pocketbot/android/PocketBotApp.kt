@@ -1,19 +1,18 @@
 package org.pocketbot.android
 
 import android.app.Application
-import android.content.Intent
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.SupervisorJob
-import kotlinx.coroutines.launch
 import org.pocketbot.android.bluetooth.BluetoothAccess
 import org.pocketbot.android.model.AppModel
 import org.pocketbot.sdk.transport.EmulatorDiscoverer
 
-/** What the Activity and the service get from the Application: the process-wide model and the phone's Bluetooth. */
+/** What the Activity and the service get from the Application: the process-wide model, the phone's Bluetooth, the service. */
 interface ModelOwner {
     val model: AppModel
     val bluetoothAccess: BluetoothAccess
+    val connectionService: ConnectionService.Keeper
 }
 
 /**
@@ -26,6 +25,8 @@ class PocketBotApp : Application(), ModelOwner {
         private set
     override lateinit var bluetoothAccess: BluetoothAccess
         private set
+    override lateinit var connectionService: ConnectionService.Keeper
+        private set
 
     override fun onCreate() {
         super.onCreate()
@@ -33,6 +34,6 @@ class PocketBotApp : Application(), ModelOwner {
         // The main thread for the model; the robots' own work runs on Dispatchers.Default (the SDK's choice).
         val scope = CoroutineScope(SupervisorJob() + Dispatchers.Main.immediate)
         model = AppModel(scope, bluetoothAccess, emulatorAt = { host, port -> EmulatorDiscoverer(host, port) })
-        ConnectionService.follow(this, model)
+        connectionService = ConnectionService.Keeper(this, model)
     }
 }

@@ -5,17 +5,20 @@ import android.app.Application
 import android.graphics.Bitmap
 import android.graphics.Canvas
 import android.os.Looper
+import android.view.KeyEvent
 import android.view.MotionEvent
 import android.view.View
 import android.view.ViewGroup
 import android.widget.CompoundButton
 import android.widget.TextView
+import kotlinx.coroutines.CoroutineExceptionHandler
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.Job
 import kotlinx.coroutines.SupervisorJob
 import kotlinx.coroutines.cancel
 import kotlinx.coroutines.delay
+import kotlinx.coroutines.plus
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import org.pocketbot.android.bluetooth.BluetoothAccess
@@ -36,6 +39,7 @@ import kotlin.time.Duration.Companion.seconds
 class TestApp : Application(), ModelOwner {
     override lateinit var model: AppModel
     override lateinit var bluetoothAccess: BluetoothAccess
+    override lateinit var connectionService: ConnectionService.Keeper
 }
 
 /**
@@ -53,6 +57,10 @@ class AppHarness(
     private val realTime: Boolean = false,
 ) {
     val app: TestApp = RuntimeEnvironment.getApplication() as TestApp
+
+    /** What would have ended the app on a phone: an exception no coroutine of the app caught. */
+    val crashed: MutableList<Throwable> = java.util.Collections.synchronizedList(ArrayList())
+    private val crashes = CoroutineExceptionHandler { _, e -> crashed += e }
     val model: AppModel
     lateinit var activity: MainActivity
         private set
@@ -62,9 +70,9 @@ class AppHarness(
     init {
         shadowOf(app).grantPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
         app.bluetoothAccess = BluetoothAccess(app)
-        model = AppModel(scope, app.bluetoothAccess, sources) { host, port -> EmulatorDiscoverer(host, port) }
+        model = AppModel(scope + crashes, app.bluetoothAccess, sources) { host, port -> EmulatorDiscoverer(host, port) }
         app.model = model
-        ConnectionService.follow(app, model) // as PocketBotApp does
+        app.connectionService = ConnectionService.Keeper(app, model) // as PocketBotApp does
     }
 
     suspend fun launch(): MainActivity {
@@ -81,16 +89,34 @@ class AppHarness(
         run(20.milliseconds)
     }
 
-    /** The user leaves the app for good (back out of it). */
-    suspend fun closeApp() {
-        activity.finish()
-        controller.pause().stop().destroy()
+    /**
+     * The user presses Back, delivered as Android delivers it. Android 13 and later (the app opts in to
+     * OnBackInvokedCallback) hand it to the window's top callback, as ViewRootImpl does for the Back key: the app's
+     * while it registered one, else the system's (on Android 12+ it moves the app to the background). Before, the key
+     * goes through the window to the Activity (onKeyUp, onBackPressed).
+     */
+    suspend fun pressBack() {
+        val dispatcher = if (android.os.Build.VERSION.SDK_INT >= 33) root.viewRootImpl?.onBackInvokedDispatcher else null
+        if (dispatcher != null && dispatcher.isOnBackInvokedCallbackEnabled) {
+            val top = dispatcher.topCallback ?: throw AssertionError("no back callback at all")
+            top.onBackInvoked()
+        } else {
+            for (action in listOf(KeyEvent.ACTION_DOWN, KeyEvent.ACTION_UP)) {
+                val now = android.os.SystemClock.uptimeMillis()
+                root.dispatchKeyEvent(KeyEvent(now, now, action, KeyEvent.KEYCODE_BACK, 0))
+            }
+        }
         run(20.milliseconds)
     }
+
+    /** The dialog on screen, or an error. */
+    fun dialog(): android.app.AlertDialog = org.robolectric.shadows.ShadowAlertDialog.getLatestAlertDialog()?.takeIf { it.isShowing }
+        ?: throw AssertionError("no dialog on screen; visible: ${texts()}")
 
     /** Ends the Activity if the test left it alive (its window's surface released), as Android does when the app goes. */
     fun close() {
         if (::controller.isInitialized) controller.close()
+        if (crashed.isNotEmpty()) throw AssertionError("the app would have crashed: ${crashed.first()}", crashed.first())
     }
 
     /** Lets [duration] of simulated time (or real time, in [realTime]) pass, the main looper (views, broadcasts) running along. */
@@ -150,6 +176,16 @@ class AppHarness(
         return null
     }
 
+    /** The text field on screen whose hint (its label) contains [label]. */
+    fun field(label: String): android.widget.EditText = buildList { collectFields(root, this) }.firstOrNull { label in (it.hint ?: "") }
+        ?: throw AssertionError("no field \"$label\" on screen")
+
+    private fun collectFields(v: View, out: MutableList<android.widget.EditText>) {
+        if (!v.isShown) return
+        if (v is android.widget.EditText) out += v
+        if (v is ViewGroup) for (i in 0 until v.childCount) collectFields(v.getChildAt(i), out)
+    }
+
     /** The first view of type [T] on screen. */
     inline fun <reified T : View> find(): T = findType(root, T::class.java) ?: throw AssertionError("no ${T::class.simpleName} on screen")
 
@@ -165,6 +201,28 @@ class AppHarness(
         val e = MotionEvent.obtain(now, now, action, view.width * fx, view.height * fy, 0)
         view.dispatchTouchEvent(e)
         e.recycle()
+        run(10.milliseconds)
+    }
+
+    /**
+     * A finger lands on [on] at ([fromX], [fromY]) of its size and slides vertically to [toY], in steps, as a scroll
+     * does; the events go in at the window, so every view on the way (a ScrollView above) sees them as on a phone.
+     */
+    suspend fun swipe(on: View, fromX: Float, fromY: Float, toY: Float) {
+        val at = IntArray(2).also { on.getLocationInWindow(it) }
+        val x = at[0] + on.width * fromX
+        val down = android.os.SystemClock.uptimeMillis()
+        fun send(action: Int, fy: Float) {
+            val e = MotionEvent.obtain(down, android.os.SystemClock.uptimeMillis(), action, x, at[1] + on.height * fy, 0)
+            root.dispatchTouchEvent(e)
+            e.recycle()
+        }
+        send(MotionEvent.ACTION_DOWN, fromY)
+        for (i in 1..10) {
+            run(16.milliseconds)
+            send(MotionEvent.ACTION_MOVE, fromY + (toY - fromY) * i / 10)
+        }
+        send(MotionEvent.ACTION_UP, toY)
         run(10.milliseconds)
     }
 

@@ -10,7 +10,9 @@ import android.widget.RadioButton
 import org.junit.Test
 import org.junit.runner.RunWith
 import org.pocketbot.android.model.Screen
+import org.pocketbot.android.model.JoystickModel
 import org.pocketbot.android.ui.JoystickCanvas
+import org.pocketbot.android.ui.palette
 import org.pocketbot.protocol.LineFollowStatus
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.LineCalibration
@@ -34,7 +36,7 @@ import kotlin.time.Duration.Companion.seconds
  * in the emulator, ground truth from the emulator's physics. Every screen is photographed into docs/images/.
  */
 @RunWith(org.robolectric.RobolectricTestRunner::class)
-@Config(sdk = [34], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi")
+@Config(sdk = [35], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi")
 @GraphicsMode(GraphicsMode.Mode.NATIVE)
 class AppTest {
     @Test
@@ -81,6 +83,70 @@ class AppTest {
         val left = robot.trueWheelDistances
         run(1.seconds)
         assertTrue(abs(robot.trueWheelDistances.leftM - left.leftM) < 0.002, "leaving the joystick screen stopped the robot")
+    }
+
+    /**
+     * The joystick is safe to touch: a touch beside the pad (the view is wider than the pad) and scrolling the screen do
+     * not drive; a thumb resting near the centre does not creep; a touch at the rim speeds up along a ramp.
+     */
+    @Test
+    fun onlyThePadDrivesWithADeadZoneAndARamp() = withApp(world = "round") {
+        connectRobot()
+        val robot = emulator.robots.single()
+        robot.place(Pose.ofDegrees(0.4, 0.4, 0.0))
+        click("Drive")
+        val stick = find<JoystickCanvas>()
+        val scroll = find<android.widget.ScrollView>()
+        val joystick = model.session.value!!.joystick
+        val start = robot.trueWheelDistances
+        fun moved() = abs(robot.trueWheelDistances.leftM - start.leftM) + abs(robot.trueWheelDistances.rightM - start.rightM)
+
+        // Beside the pad: a swipe up that scrolls the screen, and drives nothing.
+        swipe(stick, fromX = 0.02f, fromY = 0.9f, toY = 0.1f)
+        run(500.milliseconds)
+        assertTrue(scroll.scrollY > 0, "the swipe beside the pad scrolled the screen")
+        assertEquals(false, joystick.state.value.held, "and did not take the joystick")
+        scroll.scrollTo(0, 0)
+        run(20.milliseconds)
+
+        // On the pad, within the dead zone: held, asking for nothing.
+        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
+        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.47f)
+        run(500.milliseconds)
+        assertTrue(joystick.state.value.held && joystick.state.value.leftMps == 0.0, "${joystick.state.value}")
+        assertTrue(moved() < 0.002, "a resting thumb does not creep: ${moved()} m")
+
+        // Pushed to the rim at once: the wheel speeds climb a ramp to the top speed instead of jumping there.
+        val asked = ArrayList<Double>()
+        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.0f)
+        repeat(12) {
+            run(JoystickModel.SEND_PERIOD_MS.milliseconds)
+            asked += joystick.state.value.leftMps
+        }
+        val top = joystick.state.value.maxSpeedMps
+        assertTrue(asked.first() <= top / 4, "the first command is a small step: $asked")
+        assertTrue(asked.zipWithNext().all { (a, b) -> b >= a && b - a <= JoystickModel.RAMP_MPS_PER_S * 0.05 + 1e-9 }, "then it climbs: $asked")
+        assertEquals(top, asked.last(), 1e-9, "and reaches the top speed: $asked")
+        assertTrue(moved() > 0.02, "the robot drives")
+        touch(stick, MotionEvent.ACTION_UP, 0.5f, 0.0f)
+    }
+
+    /** The SDK gave up on the robot's link mid-sweep and the user cancels: the failure is told, the app lives on. */
+    @Test
+    fun cancellingASweepOnAFailedLinkIsToldNotACrash() = withApp(world = "round") {
+        connectRobot()
+        val session = model.session.value!!
+        click("Calibrate")
+        click("Sweep over the line")
+        until("sweeping") { shows("Sweeping…") }
+        session.robot.close() // as after the SDK gave up reconnecting: every command fails from now on
+        until("the link is closed") { session.robot.connection.value is ConnectionState.Closed }
+        click("Cancel")
+        until("the failure is on screen") { shows("stop the sweep failed") }
+        assertTrue(crashed.isEmpty(), "no crash: $crashed")
+        click("Follow")
+        click("Start")
+        until("every action tells its failure") { shows("start line following failed") }
     }
 
     @Test
@@ -203,6 +269,9 @@ class AppTest {
         assertTrue(abs(b.leftM - a.leftM) + abs(b.rightM - a.rightM) < 0.001, "the robot stopped on its own: $a -> $b")
         assertTrue(shows("lost"), "the user sees the link is lost: ${texts()}")
         assertTrue(shows("Stopped: the link was lost"), "and why the robot stopped: ${texts()}")
+        until("the values are marked as old") { shows("Not live: last heard") }
+        val measured = view(texts().first { it.startsWith("Wheels measured") }) as android.widget.TextView
+        assertEquals(activity.palette.TEXT_SOFT, measured.currentTextColor, "the last measured speeds are greyed")
         screenshot("link-lost")
         robot.reconnectLink()
         until("the link is back", 10.seconds) { model.session.value!!.robot.connection.value == ConnectionState.Connected }
@@ -210,32 +279,45 @@ class AppTest {
         val c = robot.trueWheelDistances
         run(1.seconds)
         assertTrue(abs(robot.trueWheelDistances.leftM - c.leftM) < 0.001, "the robot does not drive off again when the link returns")
+        assertTrue(!shows("Not live"), "live again: ${texts()}")
     }
 
+    /**
+     * "Don't allow" twice: Android 11 and later show no dialog any more (a request is refused at once, and
+     * shouldShowRequestPermissionRationale turns false), so "Ask again" would do nothing: the app sends the user to
+     * its settings instead, and is ready when they come back with the permission granted.
+     */
     @Test
-    fun refusedPermissionAndBluetoothOffAreExplainedWithAWayOn() = withApp {
-        shadowOf(app).denyPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
+    fun aSecondRefusalSendsTheUserToTheAppSettingsAndBluetoothOffIsExplained() = withApp {
+        val nearby = arrayOf(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
+        shadowOf(app).denyPermissions(*nearby)
         app.bluetoothAccess.refresh()
         launch()
         assertTrue(shows("Android asks you to allow \"Nearby devices\""), texts().toString())
+        fun refuse(rationaleAfter: Boolean) {
+            val asked = shadowOf(activity).lastRequestedPermission
+            assertEquals(nearby.toList(), asked.requestedPermissions.toList())
+            nearby.forEach { shadowOf(app.packageManager).setShouldShowRequestPermissionRationale(it, rationaleAfter) }
+            activity.onRequestPermissionsResult(asked.requestCode, asked.requestedPermissions, intArrayOf(-1, -1))
+        }
         click("Allow Bluetooth")
-        val asked = shadowOf(activity).lastRequestedPermission
-        assertEquals(listOf(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT), asked.requestedPermissions.toList())
-        activity.onRequestPermissionsResult(asked.requestCode, asked.requestedPermissions, intArrayOf(-1, -1))
+        refuse(rationaleAfter = true) // the first "Don't allow": Android will ask again
         run(20.milliseconds)
         assertTrue(shows("Bluetooth permission refused"), texts().toString())
+        click("Ask again")
+        refuse(rationaleAfter = false) // the second: Android asks no more
+        run(20.milliseconds)
+        assertTrue(shows("Android no longer asks"), texts().toString())
         screenshot("permission-refused")
-        // Android will not show the dialog again (the user refused it): the way on is the app's settings.
         click("Open settings")
         val settings = shadowOf(activity).nextStartedActivity
         assertEquals(Settings.ACTION_APPLICATION_DETAILS_SETTINGS, settings.action)
         assertEquals("package:org.pocketbot.android", settings.data.toString())
 
-        // Granted, but Bluetooth is off: the app asks to turn it on.
-        shadowOf(app).grantPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
+        // Allowed in the settings, but Bluetooth is off: back in the app, it asks to turn it on.
+        shadowOf(app).grantPermissions(*nearby)
         shadowOf(BluetoothAdapter.getDefaultAdapter()).setEnabled(false)
-        app.sendBroadcast(Intent(BluetoothAdapter.ACTION_STATE_CHANGED))
-        app.bluetoothAccess.permissionsAnswered()
+        controller.pause().stop().start().resume()
         run(20.milliseconds)
         assertTrue(shows("Bluetooth is off"), texts().toString())
         click("Turn Bluetooth on")

@@ -1,7 +1,6 @@
 package org.pocketbot.android
 
 import android.view.MotionEvent
-import android.widget.EditText
 import org.junit.Assume.assumeTrue
 import org.junit.Test
 import org.junit.runner.RunWith
@@ -25,7 +24,7 @@ import kotlin.time.Duration.Companion.milliseconds
  * address as a phone on the Wi-Fi reaches it: typed in, found, connected and driven with the joystick.
  */
 @RunWith(org.robolectric.RobolectricTestRunner::class)
-@Config(sdk = [34], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi")
+@Config(sdk = [35], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi")
 class NetworkEmulatorTest {
     @Test
     fun theAppFindsAnEmulatorOnTheNetworkByItsAddressAndDrivesItsRobot() {
@@ -37,7 +36,7 @@ class NetworkEmulatorTest {
             emu.start(Speed.Realtime(1.0))
             withRealTimeApp(emu) {
                 launch()
-                find<EditText>().setText("$network:$control")
+                field("Emulator address").setText("$network:$control")
                 click("Find")
                 until("the emulator's robots are listed") { model.found.value.size == 2 }
                 assertEquals(emu.robots.map { "tcp://$network:${it.tcpPort}" }, model.found.value.map { it.address })

@@ -73,14 +73,19 @@ class BridgedBluetoothDevice {
     protected fun getName(): String? = names[device.address]
 
     @Implementation
-    protected fun createRfcommSocketToServiceRecord(uuid: UUID): BluetoothSocket {
+    protected fun createRfcommSocketToServiceRecord(uuid: UUID): BluetoothSocket = socket(uuid, secure = true)
+
+    @Implementation
+    protected fun createInsecureRfcommSocketToServiceRecord(uuid: UUID): BluetoothSocket = socket(uuid, secure = false)
+
+    private fun socket(uuid: UUID, secure: Boolean): BluetoothSocket {
         // As Android does: no RFCOMM socket while the adapter is off (an IOException without a message).
         if (!BluetoothAdapter.getDefaultAdapter().isEnabled) throw IOException()
         val socket = Shadow.newInstanceOf(BluetoothSocket::class.java)
         val shadow = Shadow.extract<AndroidBluetoothSocket>(socket)
         sockets += socket
         lastUuid = uuid
-        if (device.address in outOfRange) {
+        if (device.address in outOfRange || (secure && device.address in refusingSecure)) {
             // Android's words when nothing answers an RFCOMM connect.
             shadow.refuse = IOException("read failed, socket might closed or timeout, read ret: -1")
         } else {
@@ -155,6 +160,9 @@ class BridgedBluetoothDevice {
         val sockets: MutableList<BluetoothSocket> = CopyOnWriteArrayList()
         val bridges: MutableList<Bridge> = CopyOnWriteArrayList()
         private val outOfRange: MutableSet<String> = ConcurrentHashMap.newKeySet()
+
+        /** Robots whose module refuses a secure (authenticated, encrypted) RFCOMM link, as some serial modules do. */
+        val refusingSecure: MutableSet<String> = ConcurrentHashMap.newKeySet()
         @Volatile var lastUuid: UUID? = null
 
         /** The robot at [address] leaves the phone's range: its links break, and connecting fails until [backInRange]. */
@@ -177,6 +185,7 @@ class BridgedBluetoothDevice {
             sockets.clear()
             names.clear()
             outOfRange.clear()
+            refusingSecure.clear()
         }
     }
 }
@@ -216,7 +225,7 @@ class AndroidBluetoothSocket : ShadowBluetoothSocket() {
 }
 
 @RunWith(org.robolectric.RobolectricTestRunner::class)
-@Config(sdk = [34], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi",
+@Config(sdk = [35], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi",
     shadows = [BridgedBluetoothDevice::class, AndroidBluetoothSocket::class])
 class RfcommTest {
     private val emulator = Emulator.local(robots = 1, world = "round")
@@ -245,14 +254,25 @@ class RfcommTest {
         emulator.start(Speed.Realtime(1.0))
         BridgedBluetoothDevice.robots[pocketBot.address] = robot.startTcp()
 
-        // Discovery: the paired PocketBot, then one found nearby; the headphones are no robot.
-        val search = async { AndroidBluetoothDiscoverer(app, adapter).discover().toList() }
-        withTimeoutOrNull(5.seconds) { while (!adapter.isDiscovering) delay(10) } ?: throw AssertionError("no discovery started")
-        app.sendBroadcast(Intent(BluetoothDevice.ACTION_FOUND).putExtra(BluetoothDevice.EXTRA_DEVICE, nearby).putExtra(BluetoothDevice.EXTRA_NAME, "PocketBot-7"))
-        app.sendBroadcast(Intent(BluetoothAdapter.ACTION_DISCOVERY_FINISHED))
-        shadowOf(Looper.getMainLooper()).idle()
-        val found = withTimeoutOrNull(5.seconds) { search.await() } ?: throw AssertionError("the discovery did not end")
-        assertEquals(listOf("PocketBot-1", "PocketBot-7"), found.map { it.name })
+        // Discovery: the paired PocketBot, then one found nearby, and one whose name Android resolves only later
+        // (found nameless, then ACTION_NAME_CHANGED); the headphones are no robot.
+        val unnamed = adapter.getRemoteDevice("00:11:22:33:44:77")
+        suspend fun discover(everyDevice: Boolean): List<org.pocketbot.sdk.transport.RobotDevice> {
+            val search = async { AndroidBluetoothDiscoverer(app, adapter, everyDevice).discover().toList() }
+            withTimeoutOrNull(5.seconds) { while (!adapter.isDiscovering) delay(10) } ?: throw AssertionError("no discovery started")
+            app.sendBroadcast(Intent(BluetoothDevice.ACTION_FOUND).putExtra(BluetoothDevice.EXTRA_DEVICE, nearby).putExtra(BluetoothDevice.EXTRA_NAME, "PocketBot-7"))
+            app.sendBroadcast(Intent(BluetoothDevice.ACTION_FOUND).putExtra(BluetoothDevice.EXTRA_DEVICE, unnamed))
+            shadowOf(Looper.getMainLooper()).idle()
+            app.sendBroadcast(Intent(BluetoothDevice.ACTION_NAME_CHANGED).putExtra(BluetoothDevice.EXTRA_DEVICE, unnamed).putExtra(BluetoothDevice.EXTRA_NAME, "PocketBot-9"))
+            app.sendBroadcast(Intent(BluetoothAdapter.ACTION_DISCOVERY_FINISHED))
+            shadowOf(Looper.getMainLooper()).idle()
+            return withTimeoutOrNull(5.seconds) { search.await() } ?: throw AssertionError("the discovery did not end")
+        }
+        assertEquals(listOf("PocketBot-7", "00:11:22:33:44:77", "PocketBot-9").let { listOf("PocketBot-1", "Headphones") + it },
+            discover(everyDevice = true).map { it.name }, "every device, the nameless one by its address, then again by its name")
+        adapter.cancelDiscovery()
+        val found = discover(everyDevice = false)
+        assertEquals(listOf("PocketBot-1", "PocketBot-7", "PocketBot-9"), found.map { it.name })
         val device = found.first() as BluetoothRobotDevice
         assertEquals("bluetooth:00:11:22:33:44:55", device.address)
 
@@ -330,6 +350,34 @@ class RfcommTest {
         until("the SDK reconnects once Bluetooth is on") { session.robot.connection.value == ConnectionState.Connected }
         until("the user reads that it is back") { shows("Link to PocketBot-1 is back") }
         assertStaysStill(robot, "the robot does not drive off again when the link returns")
+    }
+
+    /**
+     * A robot that discovery does not name (a module never renamed), typed in by its address, whose module refuses a
+     * secure RFCOMM link: the app falls back to an insecure one, says so, and drives the robot.
+     */
+    @Test
+    fun aRobotTypedInByAddressThatRefusesSecureRfcommIsConnectedInsecurelyAndSaysSo() = withBluetoothApp {
+        BridgedBluetoothDevice.names.remove(PAIRED)
+        BridgedBluetoothDevice.refusingSecure += PAIRED
+        shadowOf(BluetoothAdapter.getDefaultAdapter()).setBondedDevices(emptySet())
+        launch()
+        field("Bluetooth address").setText(PAIRED.lowercase())
+        click("Connect to address")
+        until("connected over RFCOMM") { model.session.value != null }
+        assertEquals("bluetooth:$PAIRED", model.session.value!!.address)
+        until("the user reads which link is used") { shows("insecure RFCOMM (not encrypted") }
+        click("Robots")
+        assertTrue(shows("insecure RFCOMM"), "the connected robot's card names the link: ${texts()}")
+        val robot = emulator.robots.single()
+        robot.place(Pose.ofDegrees(0.4, 0.4, 0.0))
+        click("Drive")
+        val stick = find<JoystickCanvas>()
+        val start = robot.trueWheelDistances
+        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
+        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.3f)
+        until("the robot drives") { robot.trueWheelDistances.leftM - start.leftM > 0.02 }
+        touch(stick, MotionEvent.ACTION_UP, 0.5f, 0.3f)
     }
 
     /** Every step of the session's connection from now on, as the SDK reports them. */

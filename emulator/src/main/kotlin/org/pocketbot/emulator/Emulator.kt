@@ -20,8 +20,12 @@ import kotlin.time.Duration
 /** How fast simulated time runs when the emulator runs on its own thread. */
 public sealed interface Speed {
     /** Simulated time runs at [factor] times the wall clock (1.0 = real time). */
-    public data class Realtime(val factor: Double = 1.0) : Speed {
+    public class Realtime(public val factor: Double = 1.0) : Speed {
         init { require(factor > 0) { "factor must be positive" } }
+
+        override fun equals(other: Any?): Boolean = other is Realtime && other.factor == factor
+        override fun hashCode(): Int = factor.hashCode()
+        override fun toString(): String = "Realtime(x$factor)"
     }
 
     /** As fast as the machine allows. */
@@ -29,19 +33,19 @@ public sealed interface Speed {
 }
 
 /** Settings of an [Emulator]. */
-public data class EmulatorConfig(
+public class EmulatorConfig(
     /** Seeds every random effect (sensor noise, encoder phases, link faults): same world + seed = same run. */
-    val seed: Long = 1,
+    public val seed: Long = 1,
     /** The firmware every robot runs; by default the build-time compiled firmware. */
-    val firmware: FirmwareImage? = null,
-    val robotParams: RobotParams = RobotParams(),
-    val noise: NoiseSettings = NoiseSettings(),
+    public val firmware: FirmwareImage? = null,
+    public val robotParams: RobotParams = RobotParams(),
+    public val noise: NoiseSettings = NoiseSettings(),
     /** Threads that step robots (the caller's included); results do not depend on it. */
-    val threads: Int = Runtime.getRuntime().availableProcessors().coerceIn(1, 8),
+    public val threads: Int = Runtime.getRuntime().availableProcessors().coerceIn(1, 8),
     /** Below this many robots one thread steps them all; from it on, the emulator measures serial and parallel stepping and uses the faster. */
-    val parallelFrom: Int = 4,
+    public val parallelFrom: Int = 4,
     /** The wall clock that paces [Speed.Realtime], in nanoseconds; tests put a clock of their own here. */
-    val wallClock: WallClock = WallClock.SYSTEM,
+    public val wallClock: WallClock = WallClock.SYSTEM,
 )
 
 /** A wall clock for [Speed.Realtime] pacing: the time now, and a way to wait. */
@@ -113,16 +117,22 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     public fun robot(id: Int): RobotHandle = robots.firstOrNull { it.id == id } ?: throw NoSuchElementException("no robot $id")
 
     /**
-     * Adds a robot with [id] (default: next free, from 1) at [pose] (default: the world's next start pose) and
-     * boots its firmware at the current time.
+     * Adds a robot with [id] (default: next free, from 1) and boots its firmware at the current time.
+     *
+     * Without a [pose] the robot stands where no other robot or box is: at the first of the world's start poses
+     * that is free, else on the first free spot of a grid over the floor, off the tape, facing +x (see
+     * emulator/README.md, "Worlds"); an [IllegalStateException] says when the floor has no room left. A [pose] is
+     * taken as given: a robot placed on another is pushed apart from it in the next step.
      */
     public fun addRobot(id: Int? = null, pose: Pose? = null): RobotHandle = synchronized(lock) {
         // Ids are bytes on the wire (1..254): a fleet larger than that reuses them, as real robots would have to.
         val rid = id ?: (handles.size % 254 + 1)
         require(rid in 1..254) { "robot id $rid out of 1..254" }
         require(id == null || handles.none { it.id == rid }) { "robot id $rid exists" }
-        val start = pose ?: (world.starts.getOrNull(handles.size) ?: world.starts.firstOrNull())?.toPose()
-            ?: Pose(world.widthM / 2, world.heightM / 2, 0.0)
+        val start = pose ?: sim.freePlace(config.robotParams) ?: throw IllegalStateException(
+            "no room for another robot in world ${world.name} (${world.widthM} x ${world.heightM} m, " +
+                "${world.starts.size} start poses, ${handles.size} robots): give it a pose with addRobot(pose = ...)",
+        )
         val r = SimRobot(rid, handles.size, config.robotParams, sim, image, start, config.seed, config.noise)
         r.bootAt(nowTicks)
         sim.robots += r

@@ -19,7 +19,11 @@ import java.net.InetAddress
 import java.net.InetSocketAddress
 
 /** Total travel of each wheel on the ground, in metres (signed: backwards is negative). */
-public data class WheelDistances(val leftM: Double, val rightM: Double)
+public class WheelDistances(public val leftM: Double, public val rightM: Double) {
+    override fun equals(other: Any?): Boolean = other is WheelDistances && other.leftM == leftM && other.rightM == rightM
+    override fun hashCode(): Int = 31 * leftM.hashCode() + rightM.hashCode()
+    override fun toString(): String = "WheelDistances(left $leftM m, right $rightM m)"
+}
 
 /**
  * One robot of an [Emulator]: its ground truth, its firmware's own state read straight from WebAssembly memory,
@@ -95,9 +99,9 @@ public class RobotHandle internal constructor(
         set(value) = synchronized(lock) { sim.noise = value }
 
     /** Takes the link down: host connections are lost and nothing passes until [reconnectLink]. */
-    public fun disconnectLink() { link = link.copy(connected = false) }
+    public fun disconnectLink() { link = link.withConnected(false) }
 
-    public fun reconnectLink() { link = link.copy(connected = true) }
+    public fun reconnectLink() { link = link.withConnected(true) }
 
     /** Bytes the link delivered to a host, lost, and corrupted so far. */
     public val linkBytesToHost: Long get() = sim.link.bytesToHost

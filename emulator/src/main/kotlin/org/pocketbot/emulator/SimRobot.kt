@@ -351,8 +351,8 @@ internal class SimRobot(
 }
 
 /** Which random effects are on. Sensor noise is deterministic from the seed; slip is off by default. */
-public data class NoiseSettings(
-    val sensorNoise: Boolean = true,
+public class NoiseSettings(
+    public val sensorNoise: Boolean = true,
     /** Up to this fraction of each wheel's travel is lost to slip (random per step), 0 = no slip. */
-    val wheelSlip: Double = 0.0,
+    public val wheelSlip: Double = 0.0,
 )

@@ -1,9 +1,11 @@
 package org.pocketbot.emulator
 
 import org.pocketbot.emulator.physics.Obb
+import org.pocketbot.emulator.physics.RobotParams
 import org.pocketbot.emulator.world.Box
 import org.pocketbot.emulator.world.Surface
 import org.pocketbot.emulator.world.World
+import org.pocketbot.sdk.Pose
 import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.math.ceil
@@ -32,6 +34,33 @@ internal class SimWorld(val spec: World) {
     val ambientAdc = spec.ambientAdc
     val boxes = spec.boxes.map { SimBox(it) }
     val robots = ArrayList<SimRobot>()
+
+    // ---- placing robots ---------------------------------------------------------------------------------------
+
+    /**
+     * Where a new robot with [params] stands: the first of the world's start poses that is free, else the first free
+     * spot of a grid over the floor that is off the tape (heading +x), bottom row first; null when none is free.
+     * Free means that the robot's body, with [PLACE_CLEARANCE_M] all round, touches no robot and no box.
+     */
+    fun freePlace(params: RobotParams): Pose? {
+        val body = Obb()
+        val other = Obb()
+        val out = DoubleArray(3)
+        fun free(p: Pose): Boolean {
+            body.set(p.xM, p.yM, p.headingRad, params.lengthM / 2 + PLACE_CLEARANCE_M, params.widthM / 2 + PLACE_CLEARANCE_M)
+            return robots.none { it.body(other); body.overlap(other, out) } && boxes.none { body.overlap(it.obb, out) }
+        }
+        spec.starts.asSequence().map { it.toPose() }.firstOrNull(::free)?.let { return it }
+        val pitch = hypot(params.lengthM, params.widthM) + 2 * PLACE_CLEARANCE_M
+        val halfDiagonal = hypot(params.lengthM, params.widthM) / 2
+        val cols = (spec.widthM / pitch).toInt()
+        val rows = (spec.heightM / pitch).toInt()
+        for (row in 0 until rows) for (col in 0 until cols) {
+            val p = Pose((col + 0.5) * pitch, (row + 0.5) * pitch, 0.0)
+            if (surface.distanceToTapeEdge(p.xM, p.yM) > halfDiagonal && free(p)) return p
+        }
+        return null
+    }
 
     // ---- contacts -------------------------------------------------------------------------------------------
 
@@ -341,3 +370,6 @@ internal class SimWorld(val spec: World) {
         }
     }
 }
+
+/** Room left between a newly placed robot and any robot or box already there. */
+private const val PLACE_CLEARANCE_M: Double = 0.01

@@ -19,14 +19,31 @@ class WorldsTest {
     fun `every shipped world loads, survives a JSON round trip and starts its robots on the line`() {
         for (name in Worlds.names) {
             val w = Worlds.load(name)
-            assertEquals(w, World.fromJson(w.toJson()), "$name JSON round trip")
+            assertEquals(w.toJson(), World.fromJson(w.toJson()).toJson(), "$name JSON round trip")
             val surface = Surface(w)
             assertTrue(w.starts.isNotEmpty(), "$name has no start poses")
+            if (w.tapes.isEmpty()) continue // the open floor
             for (s in w.starts) {
                 val h = Math.toRadians(s.headingDeg)
                 val dark = surface.irDarkness(s.xM + 0.02 * cos(h), s.yM + 0.02 * sin(h), 0.0012)
                 assertTrue(dark > 0.5, "$name: the line sensor of a robot at $s sees darkness $dark, not the line")
             }
+        }
+    }
+
+    @Test
+    fun `the open floor has no tape, and a 30 cm square driven to the left from a start stays clear of the others`() {
+        val w = Worlds.load("open")
+        assertTrue(w.tapes.isEmpty() && w.boxes.isEmpty())
+        val robotHalfDiagonal = 0.029
+        for (a in w.starts) for (b in w.starts) if (a !== b) {
+            // The square spans x .. x + 0.3 and y .. y + 0.3 from its start; another robot at b must stay out of it.
+            val clear = b.xM + robotHalfDiagonal < a.xM - robotHalfDiagonal || b.xM - robotHalfDiagonal > a.xM + 0.3 + robotHalfDiagonal ||
+                b.yM + robotHalfDiagonal < a.yM - robotHalfDiagonal || b.yM - robotHalfDiagonal > a.yM + 0.3 + robotHalfDiagonal
+            assertTrue(clear, "the square from $a reaches the robot at $b")
+        }
+        for (s in w.starts) {
+            assertTrue(s.xM + 0.3 + robotHalfDiagonal < w.widthM && s.yM + 0.3 + robotHalfDiagonal < w.heightM, "the square from $s leaves the floor")
         }
     }
 

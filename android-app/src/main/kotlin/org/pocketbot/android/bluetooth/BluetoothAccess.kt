@@ -15,6 +15,7 @@ import kotlinx.coroutines.flow.asStateFlow
 import org.pocketbot.android.model.BluetoothPort
 import org.pocketbot.android.model.BluetoothStatus
 import org.pocketbot.sdk.transport.Discoverer
+import org.pocketbot.sdk.transport.RobotDevice
 
 /**
  * The phone's Bluetooth as the app sees it: whether it exists, whether the user granted the permissions it needs,
@@ -23,7 +24,8 @@ import org.pocketbot.sdk.transport.Discoverer
 public class BluetoothAccess(private val context: Context) : BluetoothPort {
     private val adapter: BluetoothAdapter? = context.getSystemService(BluetoothManager::class.java)?.adapter
     private val _status = MutableStateFlow(BluetoothStatus.READY)
-    private var refusedOnce = false
+    private var refused = false
+    private var blocked = false
 
     override val status: StateFlow<BluetoothStatus> = _status.asStateFlow()
 
@@ -45,23 +47,42 @@ public class BluetoothAccess(private val context: Context) : BluetoothPort {
             arrayOf(Manifest.permission.ACCESS_FINE_LOCATION)
         }
 
-    /** Called with the user's answer to the permission request. */
-    public fun permissionsAnswered() {
-        refusedOnce = !granted()
+    /**
+     * Called with the user's answer to the permission request; [canAskAgain] is whether Android would show its dialog
+     * again (after a second "Don't allow" it does not, and a request is refused without asking).
+     */
+    public fun permissionsAnswered(canAskAgain: Boolean) {
+        refused = !granted()
+        blocked = refused && !canAskAgain
         refresh()
     }
 
     override fun refresh() {
         _status.value = when {
             adapter == null -> BluetoothStatus.UNAVAILABLE
-            !granted() -> if (refusedOnce) BluetoothStatus.PERMISSION_REFUSED else BluetoothStatus.PERMISSION_NEEDED
+            !granted() -> when {
+                blocked -> BluetoothStatus.PERMISSION_BLOCKED
+                refused -> BluetoothStatus.PERMISSION_REFUSED
+                else -> BluetoothStatus.PERMISSION_NEEDED
+            }
             !adapter.isEnabled -> BluetoothStatus.OFF
             else -> BluetoothStatus.READY
         }
     }
 
-    override fun discoverer(): Discoverer? =
-        adapter?.takeIf { _status.value == BluetoothStatus.READY }?.let { AndroidBluetoothDiscoverer(context, it) }
+    override fun discoverer(everyDevice: Boolean): Discoverer? =
+        adapter?.takeIf { _status.value == BluetoothStatus.READY }?.let { AndroidBluetoothDiscoverer(context, it, everyDevice) }
+
+    override fun deviceAt(address: String): RobotDevice? {
+        val adapter = adapter?.takeIf { _status.value == BluetoothStatus.READY && BluetoothAdapter.checkBluetoothAddress(address) } ?: return null
+        val device = adapter.getRemoteDevice(address)
+        val name = try {
+            device.name
+        } catch (e: SecurityException) {
+            null
+        }
+        return BluetoothRobotDevice(device, name ?: address, adapter)
+    }
 
     private fun granted(): Boolean = permissions.all { context.checkSelfPermission(it) == PackageManager.PERMISSION_GRANTED }
 }

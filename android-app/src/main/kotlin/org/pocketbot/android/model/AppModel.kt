@@ -10,7 +10,6 @@ import kotlinx.coroutines.flow.map
 import kotlinx.coroutines.flow.update
 import kotlinx.coroutines.launch
 import org.pocketbot.sdk.ProtocolMismatchException
-import org.pocketbot.sdk.RobotException
 import org.pocketbot.sdk.connect
 import org.pocketbot.sdk.transport.Discoverer
 import org.pocketbot.sdk.transport.MergedDiscoverer
@@ -24,8 +23,11 @@ enum class BluetoothStatus {
     /** The permissions have not been asked for yet (or not answered). */
     PERMISSION_NEEDED,
 
-    /** The user refused them. */
+    /** The user refused them; Android still shows its dialog if asked again. */
     PERMISSION_REFUSED,
+
+    /** Refused for good ("Don't allow" twice): Android shows no dialog any more, only the app's settings can allow them. */
+    PERMISSION_BLOCKED,
 
     /** Bluetooth is switched off. */
     OFF,
@@ -34,10 +36,15 @@ enum class BluetoothStatus {
     UNAVAILABLE,
 }
 
-/** The phone's Bluetooth: its status, and a discoverer of robots while it is [BluetoothStatus.READY]. */
+/** The phone's Bluetooth: its status, and while it is [BluetoothStatus.READY] a discoverer and devices by address. */
 interface BluetoothPort {
     val status: StateFlow<BluetoothStatus>
-    fun discoverer(): Discoverer?
+
+    /** Finds PocketBots, or with [everyDevice] every device nearby (a robot renamed, a module never renamed). */
+    fun discoverer(everyDevice: Boolean): Discoverer?
+
+    /** The device at [address] (`00:11:22:33:44:55`), or null when that is no Bluetooth address. */
+    fun deviceAt(address: String): RobotDevice?
     fun refresh()
 }
 
@@ -111,6 +118,34 @@ class AppModel(
     /** The emulator address the user typed last (`host:port` of its control port). */
     val emulatorAddress: MutableStateFlow<String> = MutableStateFlow(DEFAULT_EMULATOR_ADDRESS)
 
+    /** Whether the app asked for the notification permission in this process (Android 13 on): it asks once. */
+    var askedForNotifications: Boolean = false
+
+    /** The Bluetooth address the user typed last. */
+    val bluetoothAddress: MutableStateFlow<String> = MutableStateFlow("")
+
+    private val _everyDevice = MutableStateFlow(false)
+
+    /** Whether a Bluetooth search lists every device, not only those named PocketBot. */
+    val everyDevice: StateFlow<Boolean> = _everyDevice.asStateFlow()
+
+    /** Lists every Bluetooth device or only PocketBots, and searches again. */
+    fun showEveryDevice(on: Boolean) {
+        if (_everyDevice.value == on) return
+        _everyDevice.value = on
+        if (!on) _found.update { list -> list.filter { it.source != BLUETOOTH || it.device.looksLikePocketBot() } }
+        if (bluetooth.status.value == BluetoothStatus.READY) scan()
+    }
+
+    /** Connects the Bluetooth device at the address the user typed (a robot that cannot be found by name). */
+    fun connectBluetoothAddress(text: String) {
+        bluetoothAddress.value = text.trim()
+        if (bluetooth.status.value != BluetoothStatus.READY) return tell("Bluetooth is not ready: allow it and turn it on first", Notice.Kind.WARNING)
+        val device = bluetooth.deviceAt(text.trim().uppercase())
+            ?: return tell("\"$text\" is no Bluetooth address: write six pairs of hex digits, e.g. 00:11:22:33:44:55", Notice.Kind.ERROR)
+        connect(FoundRobot(device, BLUETOOTH))
+    }
+
     fun show(screen: Screen) {
         if (_screen.value == Screen.DRIVE && screen != Screen.DRIVE) _session.value?.joystick?.release()
         _screen.value = screen
@@ -127,7 +162,7 @@ class AppModel(
     /** Looks for robots over Bluetooth (when it is ready) and in [sources]; the list fills as they are found. */
     fun scan() {
         val all = LinkedHashMap(sources)
-        bluetooth.discoverer()?.let { all[BLUETOOTH] = it }
+        bluetooth.discoverer(_everyDevice.value)?.let { all[BLUETOOTH] = it }
         search(all)
     }
 
@@ -163,8 +198,12 @@ class AppModel(
     /** A device as a search source found it, with the source's name. */
     private class Found(val device: RobotDevice, val source: String) : RobotDevice by device
 
+    /** A new robot goes last; one found again (a name resolved later) keeps its place. */
     private fun add(robot: FoundRobot) {
-        _found.update { list -> list.filter { it.address != robot.address } + robot }
+        _found.update { list ->
+            val at = list.indexOfFirst { it.address == robot.address }
+            if (at < 0) list + robot else list.toMutableList().also { it[at] = robot }
+        }
     }
 
     /** Connects [robot], closing the robot connected before (one robot at a time). */
@@ -181,14 +220,15 @@ class AppModel(
                 _session.value = RobotSession(connected, scope, ::tell) {
                     if (overBluetooth && bluetooth.status.value == BluetoothStatus.OFF) bluetoothOff(connected.identity.name) else null
                 }
-                dismissNotice()
+                val link = _session.value?.linkKind?.value
+                if (link?.warning == true) tell("Connected to ${connected.identity.name} over ${link.text}.", Notice.Kind.WARNING) else dismissNotice()
                 _screen.value = Screen.SENSOR
             } catch (e: CancellationException) {
                 throw e
             } catch (e: ProtocolMismatchException) {
                 tell("${robot.name} runs other firmware: ${e.message}. Update the robot or the app.", Notice.Kind.ERROR)
-            } catch (e: RobotException) {
-                tell("Cannot connect ${robot.name}: ${e.message}", Notice.Kind.ERROR)
+            } catch (e: Exception) {
+                tell("Cannot connect ${robot.name}: ${failure(e)}", Notice.Kind.ERROR)
             } finally {
                 _connecting.value = null
             }
@@ -215,6 +255,12 @@ class AppModel(
     companion object {
         /** The source name of robots found over Bluetooth. */
         const val BLUETOOTH: String = "Bluetooth"
+
+        /** The name every PocketBot2 advertises starts with this (`PocketBot-3`). */
+        const val NAME_PREFIX: String = "PocketBot"
+
+        /** True for a device whose name is a PocketBot's. */
+        fun RobotDevice.looksLikePocketBot(): Boolean = name.startsWith(NAME_PREFIX, ignoreCase = true)
 
         /** The control port of an emulator on the computer an Android emulator (AVD) runs on. */
         const val DEFAULT_EMULATOR_ADDRESS: String = "10.0.2.2:40000"

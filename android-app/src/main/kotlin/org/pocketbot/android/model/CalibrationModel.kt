@@ -10,7 +10,6 @@ import kotlinx.coroutines.launch
 import org.pocketbot.sdk.LineCalibration
 import org.pocketbot.sdk.LineCalibrator
 import org.pocketbot.sdk.Robot
-import org.pocketbot.sdk.RobotException
 
 /** Where a calibration stands: one step of the calibration screen. */
 sealed class CalibrationStep {
@@ -49,7 +48,11 @@ sealed class CalibrationStep {
  * The calibration screen's logic over the SDK's [LineCalibrator]: a sweep, or white then black by hand; the result
  * per spot; writing it (acknowledged) and saving it to EEPROM when the user confirms.
  */
-class CalibrationModel(private val robot: Robot, private val scope: CoroutineScope) {
+class CalibrationModel(
+    private val robot: Robot,
+    private val scope: CoroutineScope,
+    private val act: (String, suspend () -> Unit) -> Unit,
+) {
     private val calibrator = LineCalibrator(robot)
     private val _step = MutableStateFlow<CalibrationStep>(CalibrationStep.Ready(LineCalibration.of(robot)))
     private var job: Job? = null
@@ -114,7 +117,7 @@ class CalibrationModel(private val robot: Robot, private val scope: CoroutineSco
     fun reset() {
         if (job?.isActive == true) {
             job?.cancel()
-            scope.launch { robot.locomotion.stop() } // a sweep's turn may be running
+            act("stop the sweep") { robot.locomotion.stop() } // a sweep's turn may be running; a failure is told
         }
         _step.value = CalibrationStep.Ready(LineCalibration.of(robot))
     }
@@ -126,10 +129,8 @@ class CalibrationModel(private val robot: Robot, private val scope: CoroutineSco
                 block()
             } catch (e: CancellationException) {
                 throw e
-            } catch (e: RobotException) {
-                CalibrationStep.Failed(e.message ?: e.toString())
-            } catch (e: IllegalArgumentException) {
-                CalibrationStep.Failed(e.message ?: e.toString())
+            } catch (e: Exception) {
+                CalibrationStep.Failed(failure(e))
             }
         }
     }

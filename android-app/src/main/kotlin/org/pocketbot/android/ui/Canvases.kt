@@ -6,8 +6,10 @@ import android.graphics.Color
 import android.graphics.Paint
 import android.graphics.Path
 import android.graphics.RectF
+import android.os.Bundle
 import android.view.MotionEvent
 import android.view.View
+import android.view.accessibility.AccessibilityNodeInfo
 import org.pocketbot.android.model.LineSensorReading
 import org.pocketbot.android.model.TrajectoryView
 import org.pocketbot.sdk.LineCalibration
@@ -26,16 +28,30 @@ private fun paint(color: Int, style: Paint.Style = Paint.Style.FILL, strokeWidth
  */
 class LineSensorCanvas(context: Context) : View(context) {
     var reading: LineSensorReading? = null
-        set(value) { field = value; invalidate() }
+        set(value) {
+            field = value
+            contentDescription = value?.let(::describe)
+            invalidate()
+        }
 
-    private val spotBack = paint(Color.rgb(0xEE, 0xF1, 0xF5))
-    private val spotFill = paint(Palette.TEXT)
-    private val seenFill = paint(Palette.ACCENT)
-    private val outline = paint(Palette.OUTLINE, Paint.Style.STROKE, context.dpf(1))
-    private val thresholdLine = paint(Palette.BAD, Paint.Style.STROKE, context.dpf(1.5f))
-    private val label = paint(Palette.TEXT_SOFT).apply { textSize = context.dpf(11); textAlign = Paint.Align.CENTER }
-    private val scale = paint(Palette.OUTLINE, Paint.Style.STROKE, context.dpf(2))
-    private val marker = paint(Palette.PRIMARY)
+    /** The reading is old (the link is down): drawn faded. */
+    var stale: Boolean = false
+        set(value) { field = value; alpha = if (value) 0.45f else 1f }
+
+    private val p = context.palette
+    private val spotBack = paint(p.SPOT_BACK)
+    private val spotFill = paint(p.TEXT)
+    private val seenFill = paint(p.ACCENT)
+    private val outline = paint(p.OUTLINE, Paint.Style.STROKE, context.dpf(1))
+    private val thresholdLine = paint(p.BAD, Paint.Style.STROKE, context.dpf(1.5f))
+    private val label = paint(p.TEXT_SOFT).apply { textSize = context.dpf(11); textAlign = Paint.Align.CENTER }
+    private val scale = paint(p.OUTLINE, Paint.Style.STROKE, context.dpf(2))
+    private val marker = paint(p.PRIMARY)
+
+    /** What a screen reader says: the line, then each spot's darkness. */
+    private fun describe(r: LineSensorReading): String =
+        (if (r.seen) "Line at ${r.position} per mille, " else "No line, ") +
+            "darkness of spots 1 to 8: " + r.darkness.joinToString { "${it / 10} percent" }
 
     override fun onMeasure(widthMeasureSpec: Int, heightMeasureSpec: Int) {
         val w = MeasureSpec.getSize(widthMeasureSpec)
@@ -93,13 +109,21 @@ class CalibrationCanvas(context: Context) : View(context) {
     var partial: Pair<List<Int>, List<Int>>? = null
         set(value) { field = value; invalidate() }
 
-    private val track = paint(Color.rgb(0xEE, 0xF1, 0xF5))
-    private val range = paint(Palette.PRIMARY)
-    private val weak = paint(Palette.BAD)
-    private val label = paint(Palette.TEXT_SOFT).apply { textSize = context.dpf(11); textAlign = Paint.Align.CENTER }
+    private val p = context.palette
+    private val track = paint(p.SPOT_BACK)
+    private val range = paint(p.PRIMARY)
+    private val weak = paint(p.BAD)
+    private val label = paint(p.TEXT_SOFT).apply { textSize = context.dpf(11); textAlign = Paint.Align.CENTER }
     private val white = paint(Color.WHITE)
-    private val whiteEdge = paint(Palette.TEXT_SOFT, Paint.Style.STROKE, context.dpf(1))
-    private val black = paint(Palette.TEXT)
+    private val whiteEdge = paint(p.TEXT_SOFT, Paint.Style.STROKE, context.dpf(1))
+    private val black = paint(if (p.night) Color.BLACK else p.TEXT)
+
+    override fun invalidate() {
+        val (lows, highs) = calibration?.let { it.white to it.black } ?: partial ?: (null to null)
+        contentDescription = if (lows == null || highs == null) null else
+            "White and black readings per spot: " + lows.indices.joinToString { "spot ${it + 1}: ${lows[it]} and ${highs.getOrNull(it)}" }
+        super.invalidate()
+    }
 
     override fun onMeasure(widthMeasureSpec: Int, heightMeasureSpec: Int) {
         setMeasuredDimension(MeasureSpec.getSize(widthMeasureSpec), context.dp(200))
@@ -136,8 +160,10 @@ class CalibrationCanvas(context: Context) : View(context) {
 }
 
 /**
- * A touch joystick: a round pad and a knob the finger drags. [onMove] gets the knob's deflection (x right, y forward,
- * each -1..1) while the finger is down, [onRelease] when it lifts or the gesture is cancelled.
+ * A touch joystick: a round pad and a knob the finger drags. Only a touch that lands on the pad drives: [onMove] gets
+ * the knob's deflection (x right, y forward, each -1..1) while that finger is down, [onRelease] when it lifts or the
+ * gesture is cancelled; a touch beside the pad is left to the screen (it scrolls). For screen readers it is one
+ * control with the [steps] as its actions (a finger must hold the knob, which TalkBack users cannot).
  */
 class JoystickCanvas(context: Context) : View(context) {
     var onMove: (Double, Double) -> Unit = { _, _ -> }
@@ -147,20 +173,44 @@ class JoystickCanvas(context: Context) : View(context) {
     var knob: Pair<Double, Double> = 0.0 to 0.0
         set(value) { field = value; invalidate() }
     var active: Boolean = false
-        set(value) { field = value; invalidate() }
+        set(value) {
+            field = value
+            state(if (value) "driving" else "stopped")
+            invalidate()
+        }
 
-    private val pad = paint(Palette.PRIMARY_SOFT)
-    private val ring = paint(Palette.PRIMARY, Paint.Style.STROKE, context.dpf(2))
-    private val cross = paint(Color.argb(70, 0x1E, 0x5A, 0xA8), Paint.Style.STROKE, context.dpf(1))
-    private val knobPaint = paint(Palette.PRIMARY)
-    private val knobActive = paint(Palette.ACCENT)
-    private val arrow = paint(Color.argb(120, 0x1E, 0x5A, 0xA8))
+    /** The drives a screen reader offers as actions of this control: a label and what it does. */
+    var steps: List<Pair<String, () -> Unit>> = emptyList()
+    private var finger = -1
+
+    private val p = context.palette
+    private val pad = paint(p.PRIMARY_SOFT)
+    private val ring = paint(p.PRIMARY, Paint.Style.STROKE, context.dpf(2))
+    private val cross = paint(Color.argb(90, Color.red(p.PRIMARY), Color.green(p.PRIMARY), Color.blue(p.PRIMARY)), Paint.Style.STROKE, context.dpf(1))
+    private val knobPaint = paint(p.PRIMARY)
+    private val knobActive = paint(p.ACCENT)
+    private val arrow = paint(Color.argb(140, Color.red(p.PRIMARY), Color.green(p.PRIMARY), Color.blue(p.PRIMARY)))
 
     private val radius: Float get() = min(width, height) / 2f - context.dpf(36)
+
+    init {
+        contentDescription = "Joystick"
+        state("stopped")
+    }
 
     override fun onMeasure(widthMeasureSpec: Int, heightMeasureSpec: Int) {
         val w = MeasureSpec.getSize(widthMeasureSpec)
         setMeasuredDimension(w, min(w, context.dp(320)))
+    }
+
+    override fun onInitializeAccessibilityNodeInfo(info: AccessibilityNodeInfo) {
+        super.onInitializeAccessibilityNodeInfo(info)
+        steps.forEachIndexed { i, (label, _) -> info.addAction(AccessibilityNodeInfo.AccessibilityAction(STEP_ACTION + i, label)) }
+    }
+
+    override fun performAccessibilityAction(action: Int, arguments: Bundle?): Boolean {
+        steps.getOrNull(action - STEP_ACTION)?.let { (_, run) -> run(); return true }
+        return super.performAccessibilityAction(action, arguments)
     }
 
     override fun onDraw(canvas: Canvas) {
@@ -174,13 +224,13 @@ class JoystickCanvas(context: Context) : View(context) {
         for (k in 0 until 4) {
             val a = Math.PI / 2 * k
             val tip = r - context.dpf(10)
-            val p = Path().apply {
+            val path = Path().apply {
                 moveTo(cx + (tip * cos(a)).toFloat(), cy - (tip * sin(a)).toFloat())
                 lineTo(cx + ((tip - context.dpf(14)) * cos(a) - context.dpf(10) * sin(a)).toFloat(), cy - ((tip - context.dpf(14)) * sin(a) + context.dpf(10) * cos(a)).toFloat())
                 lineTo(cx + ((tip - context.dpf(14)) * cos(a) + context.dpf(10) * sin(a)).toFloat(), cy - ((tip - context.dpf(14)) * sin(a) - context.dpf(10) * cos(a)).toFloat())
                 close()
             }
-            canvas.drawPath(p, arrow)
+            canvas.drawPath(path, arrow)
         }
         val kx = cx + (knob.first * r).toFloat()
         val ky = cy - (knob.second * r).toFloat()
@@ -190,17 +240,39 @@ class JoystickCanvas(context: Context) : View(context) {
     override fun onTouchEvent(event: MotionEvent): Boolean {
         val r = radius
         when (event.actionMasked) {
-            MotionEvent.ACTION_DOWN, MotionEvent.ACTION_MOVE -> {
+            MotionEvent.ACTION_DOWN -> {
+                // Only the pad (and the knob standing on its rim) drives; a touch beside it belongs to the screen.
+                if (hypot(event.x - width / 2f, event.y - height / 2f) > r + context.dpf(20)) return false
+                finger = event.getPointerId(0)
                 parent?.requestDisallowInterceptTouchEvent(true)
-                val x = ((event.x - width / 2f) / r).toDouble()
-                val y = (-(event.y - height / 2f) / r).toDouble()
-                val len = max(1.0, hypot(x, y))
-                onMove(x / len, y / len)
+                moveTo(event.x, event.y, r)
             }
-            MotionEvent.ACTION_UP, MotionEvent.ACTION_CANCEL -> onRelease()
+            MotionEvent.ACTION_MOVE -> {
+                val at = event.findPointerIndex(finger)
+                if (at >= 0) moveTo(event.getX(at), event.getY(at), r)
+            }
+            MotionEvent.ACTION_POINTER_UP -> if (event.getPointerId(event.actionIndex) == finger) release()
+            MotionEvent.ACTION_UP, MotionEvent.ACTION_CANCEL -> release()
             else -> return super.onTouchEvent(event)
         }
         return true
+    }
+
+    private fun moveTo(x: Float, y: Float, r: Float) {
+        val dx = ((x - width / 2f) / r).toDouble()
+        val dy = (-(y - height / 2f) / r).toDouble()
+        val len = max(1.0, hypot(dx, dy))
+        onMove(dx / len, dy / len)
+    }
+
+    private fun release() {
+        finger = -1
+        onRelease()
+    }
+
+    private companion object {
+        /** Ids of the step actions (custom actions need ids of their own, apart from Android's standard ones). */
+        const val STEP_ACTION = 0x7F0B0100
     }
 }
 
@@ -210,14 +282,23 @@ class JoystickCanvas(context: Context) : View(context) {
  */
 class TrajectoryCanvas(context: Context) : View(context) {
     var path: TrajectoryView? = null
-        set(value) { field = value; invalidate() }
+        set(value) {
+            field = value
+            contentDescription = value?.let { "Path of %.2f metres, the robot at x %.2f, y %.2f metres".format(it.lengthM, it.pose.xM, it.pose.yM) }
+            invalidate()
+        }
 
-    private val grid = paint(Palette.OUTLINE, Paint.Style.STROKE, context.dpf(1))
-    private val line = paint(Palette.PRIMARY, Paint.Style.STROKE, context.dpf(3)).apply { strokeJoin = Paint.Join.ROUND; strokeCap = Paint.Cap.ROUND }
-    private val robot = paint(Palette.ACCENT)
-    private val start = paint(Palette.GOOD)
-    private val label = paint(Palette.TEXT_SOFT).apply { textSize = context.dpf(11) }
-    private val back = paint(Color.WHITE)
+    /** The path is old (the link is down): drawn faded. */
+    var stale: Boolean = false
+        set(value) { field = value; alpha = if (value) 0.45f else 1f }
+
+    private val p = context.palette
+    private val grid = paint(p.OUTLINE, Paint.Style.STROKE, context.dpf(1))
+    private val line = paint(p.PRIMARY, Paint.Style.STROKE, context.dpf(3)).apply { strokeJoin = Paint.Join.ROUND; strokeCap = Paint.Cap.ROUND }
+    private val robot = paint(p.ACCENT)
+    private val start = paint(p.GOOD)
+    private val label = paint(p.TEXT_SOFT).apply { textSize = context.dpf(11) }
+    private val back = paint(p.CARD)
 
     override fun onMeasure(widthMeasureSpec: Int, heightMeasureSpec: Int) {
         val w = MeasureSpec.getSize(widthMeasureSpec)
@@ -262,3 +343,4 @@ class TrajectoryCanvas(context: Context) : View(context) {
         canvas.drawPath(tri, robot)
     }
 }
+

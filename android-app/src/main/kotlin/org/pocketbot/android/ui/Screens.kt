@@ -5,6 +5,8 @@ import android.text.InputType
 import android.view.Gravity
 import android.view.View
 import android.view.ViewGroup
+import android.content.res.ColorStateList
+import android.widget.CheckBox
 import android.widget.EditText
 import android.widget.LinearLayout
 import android.widget.ProgressBar
@@ -18,6 +20,8 @@ import kotlinx.coroutines.launch
 import org.pocketbot.android.model.AppModel
 import org.pocketbot.android.model.BluetoothStatus
 import org.pocketbot.android.model.CalibrationStep
+import org.pocketbot.android.model.JoystickModel
+import org.pocketbot.android.model.Step
 import org.pocketbot.android.model.RobotSession
 import org.pocketbot.android.model.SpeedSetting
 import org.pocketbot.protocol.Colour
@@ -30,8 +34,6 @@ interface BluetoothActions {
     fun askPermission()
     fun openAppSettings()
     fun turnBluetoothOn()
-    /** True when Android will still show the permission dialog (the user has not refused it for good). */
-    fun canAskAgain(): Boolean
 }
 
 private fun Context.scroll(vararg children: View): ScrollView = ScrollView(this).apply {
@@ -39,29 +41,50 @@ private fun Context.scroll(vararg children: View): ScrollView = ScrollView(this)
     addView(vertical(0, *children).apply { setPadding(0, dp(6), 0, dp(12)) })
 }
 
+/** A robot screen: the stale banner over [children], which scroll. */
+private fun Context.robotScreen(session: RobotSession, scope: CoroutineScope, vararg children: View): View =
+    scroll(staleBanner(scope, session.freshness), *children)
+
 private fun Context.sliderRow(title: String, maxMps: Double, onRelease: (Double) -> Unit): Pair<LinearLayout, (SpeedSetting) -> Unit> {
     val label = text(title, 15f)
-    val value = text("", 15f, Palette.PRIMARY, bold = true).apply { gravity = Gravity.END }
-    val status = text("", 12f, Palette.TEXT_SOFT)
-    val bar = SeekBar(this).apply { max = (maxMps * 100).toInt() }
+    val value = text("", 15f, palette.PRIMARY, bold = true).apply { gravity = Gravity.END }
+    val status = text("", 12f, palette.TEXT_SOFT)
+    val bar = SeekBar(this).apply {
+        max = (maxMps * 100).toInt()
+        contentDescription = title
+        layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, dp(TOUCH_TARGET_DP))
+    }
     bar.setOnSeekBarChangeListener(object : SeekBar.OnSeekBarChangeListener {
         override fun onProgressChanged(seekBar: SeekBar, progress: Int, fromUser: Boolean) {
-            if (fromUser) value.text = mps(progress / 100.0)
+            if (fromUser) value.text = settingMps(progress / 100.0)
         }
         override fun onStartTrackingTouch(seekBar: SeekBar) {}
         override fun onStopTrackingTouch(seekBar: SeekBar) = onRelease(seekBar.progress / 100.0)
     })
     val row = vertical(0, horizontal(label.apply { layoutParams = weight() }, value), bar, status).apply { setPadding(0, dp(6), 0, dp(6)) }
     return row to { s: SpeedSetting ->
-        if (!s.pending) bar.progress = (s.mps * 100).toInt()
-        value.text = mps(s.mps)
+        if (!s.pending) bar.progress = Math.round(s.mps * 100).toInt()
+        value.text = settingMps(s.mps)
         status.text = when {
             s.pending -> "writing… waiting for the robot to acknowledge"
             s.refused != null -> "refused: ${s.refused}"
             else -> "acknowledged by the robot"
         }
-        status.setTextColor(if (s.refused != null) Palette.BAD else Palette.TEXT_SOFT)
+        status.setTextColor(if (s.refused != null) palette.BAD else palette.TEXT_SOFT)
     }
+}
+
+/** A one-line text field that fills its row, labelled for screen readers by [hint]. */
+private fun Context.field(value: String, hint: String): EditText = EditText(this).apply {
+    setText(value)
+    this.hint = hint
+    inputType = InputType.TYPE_CLASS_TEXT or InputType.TYPE_TEXT_VARIATION_URI
+    setSingleLine()
+    textSize = 15f
+    setTextColor(palette.TEXT)
+    setHintTextColor(palette.TEXT_SOFT)
+    minHeight = dp(TOUCH_TARGET_DP)
+    layoutParams = weight()
 }
 
 /** Robots: Bluetooth's state and the way on, the robots found, an emulator on the network, the connected robot. */
@@ -70,26 +93,38 @@ fun robotsScreen(context: Context, model: AppModel, actions: BluetoothActions, s
     val btButton = button("", ButtonStyle.FILLED) {}
     val btCard = card("BLUETOOTH", btText, gap(10), btButton)
     val scanButton = button("Find robots", ButtonStyle.FILLED) { model.scan() }
-    val progress = ProgressBar(this).apply { isIndeterminate = true; layoutParams = LinearLayout.LayoutParams(dp(28), dp(28)) }
-    val list = vertical(0)
-    val empty = text("No robots found yet. Switch a robot on and tap Find robots.", 14f, Palette.TEXT_SOFT)
-    val foundCard = card("ROBOTS NEARBY", horizontal(scanButton, gap(12), progress), gap(8), empty, list)
-    val address = EditText(this).apply {
-        setText(model.emulatorAddress.value)
-        inputType = InputType.TYPE_CLASS_TEXT or InputType.TYPE_TEXT_VARIATION_URI
-        setSingleLine()
-        textSize = 15f
-        layoutParams = weight()
+    val progress = ProgressBar(this).apply {
+        isIndeterminate = true
+        contentDescription = "Searching"
+        layoutParams = LinearLayout.LayoutParams(dp(28), dp(28))
     }
+    val list = vertical(0)
+    val empty = text("No robots found yet. Switch a robot on and tap Find robots.", 14f, palette.TEXT_SOFT)
+    val everyDevice = CheckBox(this).apply {
+        text = "Show all Bluetooth devices"
+        textSize = 15f
+        setTextColor(palette.TEXT)
+        buttonTintList = ColorStateList.valueOf(palette.PRIMARY)
+        minHeight = dp(TOUCH_TARGET_DP)
+        isChecked = model.everyDevice.value
+        setOnCheckedChangeListener { _, on -> model.showEveryDevice(on) }
+    }
+    val macField = field(model.bluetoothAddress.value, "Bluetooth address, e.g. 00:11:22:33:44:55")
+    val foundCard = card(
+        "ROBOTS NEARBY", horizontal(scanButton, gap(12), progress), gap(8), empty, list, everyDevice,
+        text("A robot that is not listed: type its Bluetooth address.", 14f, palette.TEXT_SOFT),
+        horizontal(macField, gap(8), button("Connect to address", ButtonStyle.OUTLINED) { model.connectBluetoothAddress(macField.text.toString()) }),
+    )
+    val address = field(model.emulatorAddress.value, "Emulator address, host:port")
     val emulatorCard = card(
         "EMULATOR ON THE NETWORK",
         text("No robot at hand? Drive an emulated one. On a computer on this Wi-Fi, serve the panel's emulator (World, " +
             "Serve on the network) or run pocketbot emulator --listen 0.0.0.0, then type the address it shows (host:port).",
-            14f, Palette.TEXT_SOFT),
+            14f, palette.TEXT_SOFT),
         horizontal(address, gap(8), button("Find", ButtonStyle.OUTLINED) { model.findEmulator(address.text.toString()) }),
     )
     val connectedName = text("", 18f, bold = true)
-    val connectedInfo = text("", 13f, Palette.TEXT_SOFT)
+    val connectedInfo = text("", 14f, palette.TEXT_SOFT)
     val connectedCard = card(
         "CONNECTED",
         connectedName, connectedInfo, gap(10),
@@ -108,11 +143,16 @@ fun robotsScreen(context: Context, model: AppModel, actions: BluetoothActions, s
                     btButton.setOnClickListener { actions.askPermission() }
                 }
                 BluetoothStatus.PERMISSION_REFUSED -> {
-                    val again = actions.canAskAgain()
                     btText.text = "Bluetooth permission refused: PocketBot cannot find or connect robots over Bluetooth. " +
-                        if (again) "Allow it to drive a robot, or use an emulator below." else "Allow \"Nearby devices\" in the app's settings, or use an emulator below."
-                    btButton.text = if (again) "Ask again" else "Open settings"
-                    btButton.setOnClickListener { if (again) actions.askPermission() else actions.openAppSettings() }
+                        "Allow it to drive a robot, or use an emulator below."
+                    btButton.text = "Ask again"
+                    btButton.setOnClickListener { actions.askPermission() }
+                }
+                BluetoothStatus.PERMISSION_BLOCKED -> {
+                    btText.text = "Bluetooth permission refused: Android no longer asks. Allow \"Nearby devices\" in the app's " +
+                        "settings (Permissions), or use an emulator below."
+                    btButton.text = "Open settings"
+                    btButton.setOnClickListener { actions.openAppSettings() }
                 }
                 BluetoothStatus.OFF -> {
                     btText.text = "Bluetooth is off. Turn it on to find robots."
@@ -134,19 +174,24 @@ fun robotsScreen(context: Context, model: AppModel, actions: BluetoothActions, s
             for (robot in found) {
                 val isConnected = session?.address == robot.address
                 val action = when {
-                    isConnected -> text("connected", 14f, Palette.GOOD, bold = true)
-                    connecting == robot.name -> ProgressBar(this@with).apply { isIndeterminate = true; layoutParams = LinearLayout.LayoutParams(dp(28), dp(28)) }
+                    isConnected -> text("connected", 14f, palette.GOOD, bold = true)
+                    connecting == robot.name -> ProgressBar(this@with).apply {
+                        isIndeterminate = true
+                        contentDescription = "Connecting"
+                        layoutParams = LinearLayout.LayoutParams(dp(28), dp(28))
+                    }
                     else -> button("Connect", ButtonStyle.FILLED) { model.connect(robot) }.apply { enabled(connecting == null) }
                 }
                 list.addView(horizontal(
-                    vertical(0, text(robot.name, 17f, bold = true), text("${robot.source} · ${robot.address}", 12f, Palette.TEXT_SOFT)).apply { layoutParams = weight() },
+                    vertical(0, text(robot.name, 17f, bold = true), text("${robot.source} · ${robot.address}", 12f, palette.TEXT_SOFT)).apply { layoutParams = weight() },
                     action,
                 ).apply { setPadding(0, dp(10), 0, dp(10)) })
             }
             connectedCard.visibility = if (session != null) View.VISIBLE else View.GONE
             if (session != null) {
                 connectedName.text = session.name
-                connectedInfo.text = "${session.address} · firmware ${session.firmware}"
+                val link = session.linkKind.value?.let { " · ${it.text}" } ?: ""
+                connectedInfo.text = "${session.address}$link · firmware ${session.firmware}"
             }
         }
     }
@@ -158,34 +203,36 @@ fun sensorScreen(context: Context, session: RobotSession, scope: CoroutineScope)
     val canvas = LineSensorCanvas(this)
     val seen = text("", 16f, bold = true)
     val position = text("", 15f)
-    val legend = text("Darkness per spot (black = line; orange: above the threshold, red mark). Raw reading and darkness below each.", 12f, Palette.TEXT_SOFT)
+    val legend = text("Darkness per spot (black = line; orange: above the threshold, red mark). Raw reading and darkness below each.", 13f, palette.TEXT_SOFT)
     scope.launch {
-        session.lineSensor.reading.collect { r ->
+        combine(session.lineSensor.reading, session.freshness) { r, f -> r to f }.collect { (r, f) ->
             canvas.reading = r
+            canvas.stale = !f.live
             seen.text = when {
                 r.seen -> "● Line seen"
                 r.lost -> "● Line lost"
                 else -> "● No line under the sensor"
             }
-            seen.setTextColor(if (r.seen) Palette.GOOD else if (r.lost) Palette.BAD else Palette.WARN)
+            seen.setTextColor(palette.live(f, if (r.seen) palette.GOOD else if (r.lost) palette.BAD else palette.WARN))
+            position.setTextColor(palette.live(f, palette.TEXT))
             position.text = if (r.seen) "Position ${r.position} ‰ (${if (r.position < -50) "left" else if (r.position > 50) "right" else "centred"})" else "Position: —"
         }
     }
-    scroll(card("LINE SENSOR", horizontal(seen.apply { layoutParams = weight() }, position), gap(8), canvas, legend))
+    robotScreen(session, scope, card("LINE SENSOR", seen, position, gap(8), canvas, legend))
 }
 
 /** Calibration: a sweep over the line or white-then-black by hand, the result per spot, write, save. */
 fun calibrationScreen(context: Context, session: RobotSession, scope: CoroutineScope): View = with(context) {
     val model = session.calibration
     val headline = text("", 17f, bold = true)
-    val detail = text("", 14f, Palette.TEXT_SOFT)
+    val detail = text("", 14f, palette.TEXT_SOFT)
     val bar = ProgressBar(this, null, android.R.attr.progressBarStyleHorizontal).apply { max = 100 }
     val chart = CalibrationCanvas(this)
-    val legend = text("Per spot: white (○) and black (●) readings in ADC counts, 1 = leftmost spot.", 12f, Palette.TEXT_SOFT)
+    val legend = text("Per spot: white (○) and black (●) readings in ADC counts, 1 = leftmost spot.", 13f, palette.TEXT_SOFT)
     val buttons = horizontal()
     fun setButtons(vararg b: View) {
         buttons.removeAllViews()
-        b.forEachIndexed { i, v -> if (i > 0) buttons.addView(gap(8)); buttons.addView(v) }
+        b.forEachIndexed { i, v -> if (i > 0) buttons.addView(gap(8)); buttons.addView(v.apply { layoutParams = weight() }) }
     }
     scope.launch {
         model.step.collect { step ->
@@ -261,48 +308,58 @@ fun calibrationScreen(context: Context, session: RobotSession, scope: CoroutineS
             }
         }
     }
-    scroll(card("CALIBRATION", headline, gap(4), detail, gap(8), bar, chart, legend, gap(12), buttons))
+    robotScreen(session, scope, card("CALIBRATION", headline, gap(4), detail, gap(8), bar, chart, legend, gap(12), buttons))
 }
 
-/** Joystick: drag to drive, release to stop. */
+/** Joystick: drag to drive, release to stop; or a step at a time with buttons (and TalkBack's actions). */
 fun driveScreen(context: Context, session: RobotSession, scope: CoroutineScope): View = with(context) {
     val model = session.joystick
     val stick = JoystickCanvas(this).apply {
         onMove = { x, y -> model.move(x, y) }
         onRelease = { model.release() }
+        steps = Step.entries.map { step -> step.label to { model.step(step) } }
     }
     val target = text("", 15f)
-    val measured = text("", 15f, Palette.TEXT_SOFT)
-    val hint = text("", 14f, Palette.TEXT_SOFT).apply { gravity = Gravity.CENTER }
+    val measured = text("", 15f, palette.TEXT_SOFT)
+    val hint = text("", 14f, palette.TEXT_SOFT).apply { gravity = Gravity.CENTER }
     val maxLabel = text("", 15f)
     val slider = SeekBar(this).apply {
-        max = ((org.pocketbot.android.model.JoystickModel.MAX_SPEED_MPS - org.pocketbot.android.model.JoystickModel.MIN_SPEED_MPS) * 100).toInt()
-        progress = ((model.state.value.maxSpeedMps - org.pocketbot.android.model.JoystickModel.MIN_SPEED_MPS) * 100).toInt()
+        max = ((JoystickModel.MAX_SPEED_MPS - JoystickModel.MIN_SPEED_MPS) * 100).toInt()
+        progress = ((model.state.value.maxSpeedMps - JoystickModel.MIN_SPEED_MPS) * 100).toInt()
+        layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, dp(TOUCH_TARGET_DP))
+        contentDescription = "Top speed"
         setOnSeekBarChangeListener(object : SeekBar.OnSeekBarChangeListener {
             override fun onProgressChanged(seekBar: SeekBar, progress: Int, fromUser: Boolean) {
-                if (fromUser) model.setMaxSpeed(org.pocketbot.android.model.JoystickModel.MIN_SPEED_MPS + progress / 100.0)
+                if (fromUser) model.setMaxSpeed(JoystickModel.MIN_SPEED_MPS + progress / 100.0)
             }
             override fun onStartTrackingTouch(seekBar: SeekBar) {}
             override fun onStopTrackingTouch(seekBar: SeekBar) {}
         })
     }
+    fun stepButton(step: Step) = button(step.label, ButtonStyle.OUTLINED) { model.step(step) }.apply { layoutParams = weight() }
+    val steps = card(
+        "STEP BY STEP",
+        text("Each tap drives a short way and stops by itself.", 14f, palette.TEXT_SOFT), gap(8),
+        horizontal(stepButton(Step.FORWARD), gap(8), stepButton(Step.BACK)), gap(8),
+        horizontal(stepButton(Step.LEFT), gap(8), stepButton(Step.RIGHT)),
+    )
     scope.launch {
         model.state.collect { s ->
             stick.knob = s.x to s.y
             stick.active = s.held
-            target.text = "Wheels asked: left ${"%.2f".format(s.leftMps)}, right ${mps(s.rightMps)}"
+            target.text = "Wheels asked: left ${mps(s.leftMps)}, right ${mps(s.rightMps)}"
             maxLabel.text = "Top speed ${mps(s.maxSpeedMps)}"
             hint.text = s.stoppedBecause?.let { "Stopped: $it" } ?: if (s.held) "Driving — let go to stop" else "Hold and drag the knob to drive; let go and the robot stops."
-            hint.setTextColor(if (s.stoppedBecause != null) Palette.BAD else Palette.TEXT_SOFT)
+            hint.setTextColor(if (s.stoppedBecause != null) palette.BAD else palette.TEXT_SOFT)
         }
     }
     scope.launch {
-        session.robot.motors.wheels.collect { w -> measured.text = "Wheels measured: left ${"%.2f".format(w.speedLeftMmps / 1000.0)}, right ${mps(w.speedRightMmps / 1000.0)}" }
+        combine(session.robot.motors.wheels, session.freshness) { w, f -> w to f }.collect { (w, f) ->
+            measured.text = "Wheels measured: left ${mps(w.speedLeftMmps / 1000.0)}, right ${mps(w.speedRightMmps / 1000.0)}"
+            measured.setTextColor(palette.live(f, palette.TEXT_SOFT))
+        }
     }
-    scroll(
-        card("JOYSTICK", hint, stick),
-        card("SPEED", maxLabel, slider, target, measured),
-    )
+    robotScreen(session, scope, card("JOYSTICK", hint, stick), steps, card("SPEED", maxLabel, slider, target, measured))
 }
 
 /** Line following: start and stop, speed, colour mode with the red and blue speeds. */
@@ -310,29 +367,37 @@ fun followScreen(context: Context, session: RobotSession, scope: CoroutineScope)
     val model = session.lineFollow
     val status = text("", 20f, bold = true)
     val segment = text("", 14f)
-    val speed = text("", 14f, Palette.TEXT_SOFT)
+    val speed = text("", 14f, palette.TEXT_SOFT)
     val start = button("Start") { model.start() }
     val stop = button("Stop", ButtonStyle.DANGER) { model.stop() }
     val (speedRow, showSpeed) = sliderRow("Speed on black", 0.5) { model.setSpeed(it) }
     val (redRow, showRed) = sliderRow("Red tape: slow down to", 0.5) { model.setRedSpeed(it) }
     val (blueRow, showBlue) = sliderRow("Blue tape: speed up to", 0.5) { model.setBlueSpeed(it) }
-    val plain = RadioButton(this).apply { text = "Plain: one speed"; id = View.generateViewId(); textSize = 15f }
-    val segments = RadioButton(this).apply { text = "Colour segments: red slows, blue speeds up"; id = View.generateViewId(); textSize = 15f }
+    fun radio(label: String) = RadioButton(this).apply {
+        text = label
+        id = View.generateViewId()
+        textSize = 15f
+        setTextColor(palette.TEXT)
+        minHeight = dp(TOUCH_TARGET_DP)
+    }
+    val plain = radio("Plain: one speed")
+    val segments = radio("Colour segments: red slows, blue speeds up")
     val modes = RadioGroup(this).apply {
         addView(plain); addView(segments)
         setOnCheckedChangeListener { _, checked -> model.setColourMode(if (checked == segments.id) ColourMode.SEGMENTS else ColourMode.PLAIN) }
     }
     scope.launch {
-        model.view.collect { v ->
+        combine(model.view, session.freshness) { v, f -> v to f }.collect { (v, f) ->
             status.text = when (v.status) {
                 LineFollowStatus.FOLLOWING -> "● Following the line"
                 LineFollowStatus.LOST -> "● Line lost: stopped"
                 else -> "● Not following"
             }
-            status.setTextColor(when (v.status) { LineFollowStatus.FOLLOWING -> Palette.GOOD; LineFollowStatus.LOST -> Palette.BAD; else -> Palette.TEXT_SOFT })
+            status.setTextColor(palette.live(f, when (v.status) { LineFollowStatus.FOLLOWING -> palette.GOOD; LineFollowStatus.LOST -> palette.BAD; else -> palette.TEXT_SOFT }))
             segment.text = "Under the robot: ${v.segment.name.lowercase()} tape"
-            segment.setTextColor(when (v.segment) { Colour.RED -> Palette.RED_TAPE; Colour.BLUE -> Palette.BLUE_TAPE; else -> Palette.TEXT })
+            segment.setTextColor(palette.live(f, when (v.segment) { Colour.RED -> palette.RED_TAPE; Colour.BLUE -> palette.BLUE_TAPE; else -> palette.TEXT }))
             speed.text = "Speed now ${mps(v.speedMps)}"
+            speed.setTextColor(palette.live(f, palette.TEXT_SOFT))
             val following = v.status == LineFollowStatus.FOLLOWING
             start.enabled(!following)
             stop.enabled(following)
@@ -342,7 +407,8 @@ fun followScreen(context: Context, session: RobotSession, scope: CoroutineScope)
             showSpeed(v.speed); showRed(v.redSpeed); showBlue(v.blueSpeed)
         }
     }
-    scroll(
+    robotScreen(
+        session, scope,
         card("LINE FOLLOWING", status, segment, speed, gap(12), horizontal(start.apply { layoutParams = weight() }, gap(10), stop.apply { layoutParams = weight() })),
         card("SPEEDS (ROBOT SETTINGS)", speedRow),
         card("COLOUR MODE", modes, redRow, blueRow),
@@ -353,15 +419,17 @@ fun followScreen(context: Context, session: RobotSession, scope: CoroutineScope)
 fun pathScreen(context: Context, session: RobotSession, scope: CoroutineScope): View = with(context) {
     val model = session.trajectory
     val canvas = TrajectoryCanvas(this)
-    val info = text("", 14f, Palette.TEXT_SOFT)
+    val info = text("", 14f, palette.TEXT_SOFT)
     scope.launch {
-        model.view.collect { v ->
+        combine(model.view, session.freshness) { v, f -> v to f }.collect { (v, f) ->
             canvas.path = v
+            canvas.stale = !f.live
             val heading = (Math.toDegrees(v.pose.headingRad) % 360 + 540) % 360 - 180 // -180..180
             info.text = "Travelled %.2f m · at x %.2f m, y %.2f m, heading %.0f°".format(v.lengthM, v.pose.xM, v.pose.yM, heading)
+            info.setTextColor(palette.live(f, palette.TEXT))
         }
     }
-    scroll(card("TRAJECTORY (ODOMETRY)", canvas, gap(8), info, gap(8), horizontal(button("Clear path", ButtonStyle.OUTLINED) { model.clear() })))
+    robotScreen(session, scope, card("TRAJECTORY (ODOMETRY)", canvas, gap(8), info, gap(8), horizontal(button("Clear path", ButtonStyle.OUTLINED) { model.clear() })))
 }
 
 /** What a robot screen shows while no robot is connected. */
@@ -369,7 +437,7 @@ fun noRobotScreen(context: Context, model: AppModel): View = with(context) {
     vertical(24,
         text("No robot connected", 20f, bold = true).apply { gravity = Gravity.CENTER },
         gap(8),
-        text("Find a robot and connect it first.", 15f, Palette.TEXT_SOFT).apply { gravity = Gravity.CENTER },
+        text("Find a robot and connect it first.", 15f, palette.TEXT_SOFT).apply { gravity = Gravity.CENTER },
         gap(16),
         button("Find robots") { model.show(org.pocketbot.android.model.Screen.ROBOTS) }.apply {
             layoutParams = LinearLayout.LayoutParams(ViewGroup.LayoutParams.WRAP_CONTENT, ViewGroup.LayoutParams.WRAP_CONTENT).apply { gravity = Gravity.CENTER_HORIZONTAL }

@@ -5,6 +5,7 @@ import org.pocketbot.emulator.EmulatorConfig
 import org.pocketbot.emulator.firmware.FirmwareEngine
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.sdk.Pose
+import org.pocketbot.emulator.world.Point
 import org.pocketbot.emulator.world.Tape
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
@@ -15,6 +16,7 @@ import kotlin.math.abs
 import kotlin.math.ceil
 import kotlin.math.hypot
 import kotlin.math.sqrt
+import kotlin.system.exitProcess
 import kotlin.time.Duration.Companion.seconds
 
 /**
@@ -26,12 +28,15 @@ import kotlin.time.Duration.Companion.seconds
  * On stderr per fleet: the realtime factor of each simulated second (lowest, median, highest: how much the machine
  * varied during the run), and two hashes of the end state: `state_hash` of everything simulated, firmware memory
  * included, and `pose_hash` of the robots' true poses alone, which stays the same for a firmware build that differs
- * only in its code or memory layout (another compiler flag) and behaves the same. Both engines give the same hashes.
+ * only in its code or memory layout (another compiler flag) and behaves the same. Both engines give the same hashes:
+ * the bench says so and exits with status 1 when they do not.
  * The fleet shares a floor of round tracks (thesis A.3) laid side by side, three robots per track.
  * Args: fleet sizes (default 1 3 10 30 100 300 1000). `-Dpocketbot.bench.engines=native,chicory` picks the engines
  * (default: both when the native one runs here), which run in turn for each fleet, between the native fleet's runs.
+ *
+ * Internal: a program of this repository (`make bench-emulator`), not part of the library's API.
  */
-public fun main(args: Array<String>) {
+internal fun main(args: Array<String>) {
     val sizes = args.mapNotNull { it.toIntOrNull() }.ifEmpty { listOf(1, 3, 10, 30, 100, 300, 1000) }
     val images = engines().map { FirmwareImage.compiled(it) }
     // Warm-up: let the JIT compile the firmware (under Chicory) and the emulator before anything is measured.
@@ -40,6 +45,7 @@ public fun main(args: Array<String>) {
         run(image, 100, measureS = 2, warmS = 1)
     }
     val native = System.getProperty("pocketbot.bench.native")?.let { NativeFleet(java.io.File(it)) }
+    var disagreements = 0
     for (n in sizes) {
         // The native fleet runs just before and just after the emulator, so the machine's drift falls on both sides.
         val nativeBefore = native?.run(n)
@@ -65,7 +71,14 @@ public fun main(args: Array<String>) {
                     "state_hash=${result.stateHash} pose_hash=${result.poseHash}",
             )
         }
+        // The engines must agree bit for bit (DeterminismAndFaultsTest holds them to it too): a benchmark whose
+        // engines diverge measures two different simulations.
+        if (results.map { (_, r) -> r.stateHash to r.poseHash }.distinct().size > 1) {
+            System.err.println("emulator robots=$n: the engines' state hashes differ")
+            disagreements++
+        }
     }
+    if (disagreements > 0) exitProcess(1)
 }
 
 /** The engines to compare: `-Dpocketbot.bench.engines`, or both when the native one can run. */
@@ -127,12 +140,12 @@ private fun run(image: FirmwareImage, n: Int, measureS: Int? = null, warmS: Int?
     val world = World(
         name = "round-x$tracks", widthM = tile * cols, heightM = tile * rows, ambientAdc = round.ambientAdc,
         tapes = List(tracks) { k ->
-            track.copy(center = track.center.copy(x = track.center.x + tile * (k % cols), y = track.center.y + tile * (k / cols)))
+            val center = Point(track.center.x + tile * (k % cols), track.center.y + tile * (k / cols))
+            Tape.Arc(center, track.radiusM, track.startDeg, track.sweepDeg, track.widthM, track.colour)
         },
     )
-    val config = EmulatorConfig(seed = 42, firmware = image).let { c ->
-        System.getProperty("pocketbot.bench.threads")?.toIntOrNull()?.let { c.copy(threads = it) } ?: c
-    }
+    val config = System.getProperty("pocketbot.bench.threads")?.toIntOrNull()
+        ?.let { EmulatorConfig(seed = 42, firmware = image, threads = it) } ?: EmulatorConfig(seed = 42, firmware = image)
     Emulator(world, config).use { emu ->
         val emptyHeap = liveHeap()
         val start = LineFollow(1, 0, 0f)

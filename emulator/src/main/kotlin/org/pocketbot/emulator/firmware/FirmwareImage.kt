@@ -6,6 +6,8 @@ import com.dylibso.chicory.wasm.Parser
 import com.dylibso.chicory.wasm.WasmModule
 import com.dylibso.chicory.wasm.types.ExternalType
 import com.dylibso.chicory.wasm.types.OpCode
+import com.sun.management.HotSpotDiagnosticMXBean
+import java.lang.management.ManagementFactory
 import java.nio.file.Files
 import java.nio.file.Path
 import java.security.MessageDigest
@@ -88,7 +90,12 @@ public class FirmwareImage internal constructor(
          *
          * Throws [IllegalStateException] when the emulator was built without the firmware (run `make -C firmware
          * wasm`, then rebuild the emulator), or when [FirmwareEngine.NATIVE] is asked for and cannot run.
+         *
+         * Under Chicory, logs a warning (once) when the JVM was started without `-XX:-DontCompileHugeMethods`:
+         * HotSpot then never compiles the firmware's largest functions, and the emulator runs at about half its speed
+         * (emulator/README.md, "Performance").
          */
+        @JvmOverloads
         public fun compiled(engine: FirmwareEngine? = null): FirmwareImage {
             val cls = try {
                 Class.forName(COMPILED_CLASS)
@@ -116,6 +123,7 @@ public class FirmwareImage internal constructor(
                 why == null -> "the firmware runs on Chicory, as asked"
                 else -> "the firmware runs on Chicory (JVM bytecode), not natively: $why"
             })
+            if (chosen == FirmwareEngine.CHICORY) hugeMethodsChecked
             return FirmwareImage(module, machines, "compiled:$COMPILED_CLASS", chosen)
         }
 
@@ -180,6 +188,21 @@ public class FirmwareImage internal constructor(
         private fun report(message: String) {
             if (synchronized(reported) { reported.add(message) }) logger.log(System.Logger.Level.INFO, "PocketBot emulator: $message")
         }
+
+        /** Warns once per JVM if huge methods stay interpreted (see [compiled]). */
+        private val hugeMethodsChecked: Unit by lazy {
+            if (hugeMethodsStayInterpreted()) System.getLogger("org.pocketbot.emulator").log(
+                System.Logger.Level.WARNING,
+                "the JVM runs without -XX:-DontCompileHugeMethods: HotSpot leaves the firmware's largest functions " +
+                    "interpreted and the emulator runs at about half its speed; add the flag to the java command line",
+            )
+        }
+
+        /** True when HotSpot says it will not compile methods over 8000 bytecode bytes; false on other JVMs. */
+        internal fun hugeMethodsStayInterpreted(): Boolean = runCatching {
+            ManagementFactory.getPlatformMXBean(HotSpotDiagnosticMXBean::class.java)
+                .getVMOption("DontCompileHugeMethods").value == "true"
+        }.getOrDefault(false)
 
         /** True when the build-time compiled firmware is on the class path. */
         public fun compiledAvailable(): Boolean =

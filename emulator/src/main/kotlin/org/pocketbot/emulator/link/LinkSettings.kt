@@ -8,25 +8,25 @@ import kotlin.time.Duration.Companion.milliseconds
  * lossy. Applies to both directions; changeable while the emulator runs. Random effects come from the robot's
  * own seeded generator, so a run with the same seed and the same host traffic is the same.
  */
-public data class LinkSettings(
+public class LinkSettings(
     /** Bits per second; every byte costs 10 bits (start, 8 data, stop). */
-    val baud: Int = 115_200,
+    public val baud: Int = 115_200,
     /** Delay from the last bit sent to the byte's arrival. */
-    val latency: Duration = 2.milliseconds,
+    public val latency: Duration = 2.milliseconds,
     /** Extra delay, uniform in 0..jitter, per byte (order is kept, as on a serial link). */
-    val jitter: Duration = Duration.ZERO,
+    public val jitter: Duration = Duration.ZERO,
     /** Probability that a byte is lost. */
-    val lossRate: Double = 0.0,
+    public val lossRate: Double = 0.0,
     /** Probability that a byte arrives with one bit flipped. */
-    val corruptionRate: Double = 0.0,
+    public val corruptionRate: Double = 0.0,
     /** False: the link is down (out of range): host connections are dropped and no bytes pass. */
-    val connected: Boolean = true,
+    public val connected: Boolean = true,
     /**
      * Host-to-robot bytes the link holds before they reach the robot (a Bluetooth SPP module's or a USB serial
      * adapter's buffer): a host that sends faster than the baud rate fills it, and what does not fit is lost
      * (counted in `RobotHandle.linkBytesOverflowed`) instead of piling up for minutes.
      */
-    val bufferBytes: Int = 2048,
+    public val bufferBytes: Int = 2048,
 ) {
     init {
         require(baud in 300..10_000_000) { "baud $baud out of range" }
@@ -34,4 +34,12 @@ public data class LinkSettings(
         require(lossRate in 0.0..1.0 && corruptionRate in 0.0..1.0) { "rates are probabilities" }
         require(bufferBytes >= 1) { "bufferBytes must be positive" }
     }
+
+    /** These settings with the link up or down. */
+    internal fun withConnected(connected: Boolean): LinkSettings =
+        LinkSettings(baud, latency, jitter, lossRate, corruptionRate, connected, bufferBytes)
+
+    override fun toString(): String =
+        "LinkSettings(baud $baud, latency $latency, jitter $jitter, loss $lossRate, corruption $corruptionRate, " +
+            "${if (connected) "connected" else "disconnected"}, buffer $bufferBytes B)"
 }

@@ -5,12 +5,12 @@ import java.util.SplittableRandom
 import java.util.concurrent.ConcurrentLinkedQueue
 
 /** Receives the bytes a robot sends to its host, in order, on the emulator's stepping thread: must not block. */
-public fun interface ByteSink {
+internal fun interface ByteSink {
     public fun onBytes(bytes: ByteArray)
 }
 
 /** A host-side connection to a robot's link: gets the robot's bytes, and is told when the link drops it. */
-public interface LinkConnection : ByteSink {
+internal interface LinkConnection : ByteSink {
     /** The link went down or another host took the robot over; the connection must close. */
     public fun onLinkLost(reason: String)
 }
@@ -19,7 +19,7 @@ public interface LinkConnection : ByteSink {
  * The byte pipe between a robot's UART and its host, with the [LinkSettings] model. Host threads call
  * [hostSend], [attach], [detach]; the emulator's stepping thread does the rest.
  */
-public class RobotLink internal constructor(private val rng: SplittableRandom) {
+internal class RobotLink(private val rng: SplittableRandom) {
     @Volatile public var settings: LinkSettings = LinkSettings()
         internal set
 

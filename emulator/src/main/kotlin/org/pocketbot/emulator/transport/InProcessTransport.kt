@@ -19,7 +19,7 @@ import org.pocketbot.sdk.transport.TransportLostException
  * simulated serial link (baud rate, latency, faults) and decoded out of it, exactly as over TCP or Bluetooth,
  * without sockets. Opening a robot that already has a host takes it over (the older transport is lost).
  */
-public class InProcessTransport internal constructor(
+internal class InProcessTransport(
     private val link: RobotLink,
     override val address: String,
 ) : Transport, LinkConnection {
@@ -70,7 +70,7 @@ public class InProcessTransport internal constructor(
 }
 
 /** A robot of an embedded emulator, as a [Discoverer] finds it. */
-public class InProcessDevice internal constructor(
+internal class InProcessDevice(
     override val name: String,
     override val address: String,
     private val link: RobotLink,
@@ -84,6 +84,6 @@ public class InProcessDevice internal constructor(
 }
 
 /** Finds the robots of an embedded emulator: each robot present when [discover] is collected. */
-public class InProcessDiscoverer internal constructor(private val devices: () -> List<RobotDevice>) : Discoverer {
+internal class InProcessDiscoverer(private val devices: () -> List<RobotDevice>) : Discoverer {
     override fun discover(): Flow<RobotDevice> = flow { for (d in devices()) emit(d) }
 }

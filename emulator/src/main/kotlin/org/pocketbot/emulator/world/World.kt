@@ -8,21 +8,24 @@ import kotlinx.serialization.json.Json
 /**
  * A world as stored in `emulator/worlds/<name>.json`: a floor with tape on it, boxes, and where robots start.
  * Lengths in metres, angles in degrees; x to the right, y up, heading 0 along +x, counter-clockwise positive.
+ *
+ * The floor has no walls: its size is what the panel draws and where [org.pocketbot.emulator.Emulator.addRobot] places
+ * robots, but a robot may drive over its edge, where the floor reads white. Only boxes (and other robots) stop one.
  */
 @Serializable
-public data class World(
-    val name: String,
-    val description: String = "",
+public class World(
+    public val name: String,
+    public val description: String = "",
     /** Floor size: the floor spans (0, 0) .. (widthM, heightM). */
-    val widthM: Double,
-    val heightM: Double,
+    public val widthM: Double,
+    public val heightM: Double,
     /** Ambient light seen by the line sensor's phototransistors, in ADC counts. */
-    val ambientAdc: Int = 300,
+    public val ambientAdc: Int = 300,
     /** Tape on the floor, painted in order: a later piece covers an earlier one. */
-    val tapes: List<Tape> = emptyList(),
-    val boxes: List<Box> = emptyList(),
-    /** Start poses of the robots, used in order by [org.pocketbot.emulator.Emulator.addRobot]. */
-    val starts: List<StartPose> = emptyList(),
+    public val tapes: List<Tape> = emptyList(),
+    public val boxes: List<Box> = emptyList(),
+    /** Start poses of the robots: [org.pocketbot.emulator.Emulator.addRobot] takes the first that is free. */
+    public val starts: List<StartPose> = emptyList(),
 ) {
     public fun toJson(): String = json.encodeToString(serializer(), this)
 
@@ -33,21 +36,31 @@ public data class World(
     }
 }
 
+/** A point on the floor, in metres. */
 @Serializable
-public data class Point(val x: Double, val y: Double)
+public class Point(public val x: Double, public val y: Double) {
+    override fun equals(other: Any?): Boolean = other is Point && other.x == x && other.y == y
+    override fun hashCode(): Int = 31 * x.hashCode() + y.hashCode()
+    override fun toString(): String = "($x, $y)"
+}
 
 /**
  * Where a robot starts, as a world file writes it: the axle midpoint (`x`, `y` in metres) and the heading (`heading_deg`,
  * degrees counter-clockwise from +x). Everywhere else the emulator speaks [Pose], the SDK's pose type.
  */
 @Serializable
-public data class StartPose(
-    @SerialName("x") val xM: Double,
-    @SerialName("y") val yM: Double,
-    @SerialName("headingDeg") val headingDeg: Double = 0.0,
+public class StartPose(
+    @SerialName("x") public val xM: Double,
+    @SerialName("y") public val yM: Double,
+    @SerialName("headingDeg") public val headingDeg: Double = 0.0,
 ) {
     /** This start as a [Pose]. */
     public fun toPose(): Pose = Pose.ofDegrees(xM, yM, headingDeg)
+
+    override fun equals(other: Any?): Boolean =
+        other is StartPose && other.xM == xM && other.yM == yM && other.headingDeg == headingDeg
+    override fun hashCode(): Int = (31 * xM.hashCode() + yM.hashCode()) * 31 + headingDeg.hashCode()
+    override fun toString(): String = "($xM m, $yM m, $headingDeg°)"
 }
 
 @Serializable
@@ -78,21 +91,21 @@ public sealed class Tape {
     /** Straight pieces through [points]; [closed] joins the last point back to the first. */
     @Serializable
     @SerialName("polyline")
-    public data class Polyline(
-        val points: List<Point>,
+    public class Polyline(
+        public val points: List<Point>,
         override val widthM: Double = 0.008,
         override val colour: TapeColour = TapeColour.BLACK,
-        val closed: Boolean = false,
+        public val closed: Boolean = false,
     ) : Tape()
 
     /** A circular arc of centre line radius [radiusM] from [startDeg] through [sweepDeg] (positive: counter-clockwise). */
     @Serializable
     @SerialName("arc")
-    public data class Arc(
-        val center: Point,
-        val radiusM: Double,
-        val startDeg: Double = 0.0,
-        val sweepDeg: Double = 360.0,
+    public class Arc(
+        public val center: Point,
+        public val radiusM: Double,
+        public val startDeg: Double = 0.0,
+        public val sweepDeg: Double = 360.0,
         override val widthM: Double = 0.008,
         override val colour: TapeColour = TapeColour.BLACK,
     ) : Tape()
@@ -103,12 +116,12 @@ public sealed class Tape {
  * (friction x mass x g); an immovable one is a wall.
  */
 @Serializable
-public data class Box(
-    val center: Point,
-    val widthM: Double,
-    val heightM: Double,
-    val angleDeg: Double = 0.0,
-    val massKg: Double = 0.1,
-    val friction: Double = 0.25,
-    val movable: Boolean = true,
+public class Box(
+    public val center: Point,
+    public val widthM: Double,
+    public val heightM: Double,
+    public val angleDeg: Double = 0.0,
+    public val massKg: Double = 0.1,
+    public val friction: Double = 0.25,
+    public val movable: Boolean = true,
 )

@@ -9,7 +9,7 @@ import java.nio.file.Paths
  */
 public object Worlds {
     /** Names of the shipped worlds. */
-    public val names: List<String> = listOf("straight", "round", "figure-eight", "fork", "colours", "box", "push", "track")
+    public val names: List<String> = listOf("straight", "round", "figure-eight", "fork", "colours", "box", "push", "track", "open")
 
     /**
      * The world called [nameOrPath]: a shipped world's name, or a path to a JSON world file.

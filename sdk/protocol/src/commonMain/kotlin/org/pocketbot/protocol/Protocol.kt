@@ -506,7 +506,7 @@ public class SettingsIdentity(
 public class SettingsSync(
     /** full, reduced or no state packets (see [SyncMode]) */
     public val mode: Int,
-    /** period of state packets [ms] */
+    /** period of state packets, in ms */
     public val periodMs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -536,7 +536,7 @@ public class SettingsSync(
 
 /** Main loop timing. */
 public class SettingsScheduler(
-    /** period of the main loop tick [us] */
+    /** period of the main loop tick, in us */
     public val mainPeriodUs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -563,11 +563,11 @@ public class SettingsScheduler(
 
 /** Three-segment speed profile of movements: accelerate, cruise, brake. */
 public class SettingsProfile(
-    /** acceleration slope [m/s^2] */
+    /** acceleration slope, in m/s^2 */
     public val accelMps2: Float,
-    /** braking slope [m/s^2] */
+    /** braking slope, in m/s^2 */
     public val decelMps2: Float,
-    /** speed at start and end of the profile [m/s] */
+    /** speed at start and end of the profile, in m/s */
     public val minSpeedMps: Float,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -600,13 +600,13 @@ public class SettingsProfile(
 
 /** Line following speeds and behaviour. */
 public class SettingsLineFollow(
-    /** cruise speed on black line [m/s] */
+    /** cruise speed on black line, in m/s */
     public val speedMps: Float,
-    /** speed on red segments (colour mode) [m/s] */
+    /** speed on red segments (colour mode), in m/s */
     public val redSpeedMps: Float,
-    /** speed on blue segments (colour mode) [m/s] */
+    /** speed on blue segments (colour mode), in m/s */
     public val blueSpeedMps: Float,
-    /** stop after the line was lost this long [ms] */
+    /** stop after the line was lost this long, in ms */
     public val lostTimeoutMs: Int,
     /** 1: keep following when the host link is lost */
     public val autonomous: Int,
@@ -647,11 +647,11 @@ public class SettingsLineFollow(
 
 /** Line sensor calibration: per-spot ambient-suppressed readings of white (min) and black (max). */
 public class SettingsLineSensor(
-    /** reading over white [adc] */
+    /** reading over white, in adc */
     public val calMin: List<Int>,
-    /** reading over black [adc] */
+    /** reading over black, in adc */
     public val calMax: List<Int>,
-    /** calibrated darkness above which a spot sees the line [permille] */
+    /** calibrated darkness above which a spot sees the line, in permille */
     public val threshold: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -686,7 +686,7 @@ public class SettingsLineSensor(
 public class SettingsEncoder(
     /** encoder pulses per wheel revolution */
     public val pulsesPerRev: Int,
-    /** speed reads zero after no pulse this long [ms] */
+    /** speed reads zero after no pulse this long, in ms */
     public val speedTimeoutMs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -716,9 +716,9 @@ public class SettingsEncoder(
 
 /** Robot geometry, used by locomotion and host odometry. */
 public class SettingsGeometry(
-    /** wheel diameter [m] */
+    /** wheel diameter, in m */
     public val wheelDiameterM: Float,
-    /** distance between the wheels (gauge) [m] */
+    /** distance between the wheels (gauge), in m */
     public val wheelBaseM: Float,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -748,7 +748,7 @@ public class SettingsGeometry(
 
 /** Motor drive limits. */
 public class SettingsMotors(
-    /** largest PWM duty the controllers may command [permille] */
+    /** largest PWM duty the controllers may command, in permille */
     public val pwmLimit: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -775,11 +775,11 @@ public class SettingsMotors(
 
 /** IR proximity: beacons to other robots and obstacle detection. */
 public class SettingsProximity(
-    /** highest beacon power; 0 turns the beacon off [percent] */
+    /** highest beacon power; 0 turns the beacon off, in percent */
     public val irPower: Int,
-    /** period of IR beacons [ms] */
+    /** period of IR beacons, in ms */
     public val beaconPeriodMs: Int,
-    /** how long a sighting stays in the state [ms] */
+    /** how long a sighting stays in the state, in ms */
     public val holdMs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -812,9 +812,9 @@ public class SettingsProximity(
 
 /** The track behaviour (thesis A.3): decentralized line following with distance keeping, a token passed between robots, detours round obstacles. */
 public class SettingsTrack(
-    /** cruise speed on the line [m/s] */
+    /** cruise speed on the line, in m/s */
     public val speedMps: Float,
-    /** the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead [percent] */
+    /** the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead, in percent */
     public val tokenBoostPercent: Int,
     /** the robot with this id creates the token at its first start; 0: none does */
     public val tokenOriginId: Int,
@@ -849,7 +849,7 @@ public class SettingsTrack(
 
 /** Host link supervision. */
 public class SettingsLink(
-    /** stop host-driven motion after this long without a packet; 0 = off [ms] */
+    /** stop host-driven motion after this long without a packet; 0 = off, in ms */
     public val failsafeTimeoutMs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -903,13 +903,13 @@ public class SettingsDebug(
 
 /** Robot clock and main loop health. */
 public class StateTime(
-    /** robot time since reset [ms] */
+    /** robot time since reset, in ms */
     public val timeMs: Long,
-    /** longest main loop tick since the last state packet [us] */
+    /** longest main loop tick since the last state packet, in us */
     public val tickMaxUs: Int,
     /** main loop ticks that overran their period (since reset) */
     public val overruns: Int,
-    /** robot time of the latest overrun, 0 if none [ms] */
+    /** robot time of the latest overrun, 0 if none, in ms */
     public val lastOverrunMs: Long,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -945,9 +945,9 @@ public class StateTime(
 
 /** Total encoder pulse counts since reset (signed: backwards counts down). */
 public class StateEncoders(
-    /** left wheel [pulses] */
+    /** left wheel, in pulses */
     public val left: Int,
-    /** right wheel [pulses] */
+    /** right wheel, in pulses */
     public val right: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -977,13 +977,13 @@ public class StateEncoders(
 
 /** Measured wheel speeds and the PWM driving the motors. */
 public class StateWheels(
-    /** left wheel speed [mm/s] */
+    /** left wheel speed, in mm/s */
     public val speedLeftMmps: Int,
-    /** right wheel speed [mm/s] */
+    /** right wheel speed, in mm/s */
     public val speedRightMmps: Int,
-    /** left motor duty, -1000..1000 [permille] */
+    /** left motor duty, -1000..1000, in permille */
     public val pwmLeft: Int,
-    /** right motor duty, -1000..1000 [permille] */
+    /** right motor duty, -1000..1000, in permille */
     public val pwmRight: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -1019,9 +1019,9 @@ public class StateWheels(
 
 /** Line sensor: eight ambient-suppressed spot readings and the line position. */
 public class StateLine(
-    /** lit minus dark reading per spot, left to right [adc] */
+    /** lit minus dark reading per spot, left to right, in adc */
     public val raw: List<Int>,
-    /** line position, -1000 far left .. 1000 far right [permille] */
+    /** line position, -1000 far left .. 1000 far right, in permille */
     public val position: Int,
     /** line seen, line lost (bits: [LineFlags]) */
     public val flags: Int,
@@ -1167,11 +1167,11 @@ public class StateColour(
 
 /** Accelerometer. */
 public class StateAccel(
-    /** forward [mg] */
+    /** forward, in mg */
     public val xMg: Int,
-    /** left [mg] */
+    /** left, in mg */
     public val yMg: Int,
-    /** up [mg] */
+    /** up, in mg */
     public val zMg: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -1204,11 +1204,11 @@ public class StateAccel(
 
 /** Battery and MCU. */
 public class StatePower(
-    /** battery voltage [mV] */
+    /** battery voltage, in mV */
     public val batteryMv: Int,
-    /** current drawn [mA] */
+    /** current drawn, in mA */
     public val currentMa: Int,
-    /** MCU core temperature [0.1 degC] */
+    /** MCU core temperature, in 0.1 degC */
     public val mcuTempDc: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -1243,7 +1243,7 @@ public class StatePower(
 public class StateIndicators(
     /** status LED bitmask (bits: [LedFlags]) */
     public val led: Int,
-    /** power of the last IR beacon [percent] */
+    /** power of the last IR beacon, in percent */
     public val irPower: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -1612,9 +1612,9 @@ public data class Hello(
     public val protocolVersion: Int,
     /** hash of every packet, settings and state layout */
     public val layoutHash: Long,
-    /** sizeof(settings) [bytes] */
+    /** sizeof(settings), in bytes */
     public val settingsSize: Int,
-    /** sizeof(robot_state) [bytes] */
+    /** sizeof(robot_state), in bytes */
     public val stateSize: Int,
     /** 1: the hello_request named the session the robot already served (its duplicate history is this host's); 0: a new session, and in the hello sent at reset */
     public val sessionResumed: Int,
@@ -1692,17 +1692,17 @@ public data class StateFull(
 
 /** Encoders, wheel speeds and line position, sent every sync period in reduced mode. */
 public data class StateReduced(
-    /** robot time [ms] */
+    /** robot time, in ms */
     public val timeMs: Long,
-    /** left total count [pulses] */
+    /** left total count, in pulses */
     public val encoderLeft: Int,
-    /** right total count [pulses] */
+    /** right total count, in pulses */
     public val encoderRight: Int,
-    /** left wheel speed [mm/s] */
+    /** left wheel speed, in mm/s */
     public val speedLeftMmps: Int,
-    /** right wheel speed [mm/s] */
+    /** right wheel speed, in mm/s */
     public val speedRightMmps: Int,
-    /** line position [permille] */
+    /** line position, in permille */
     public val linePosition: Int,
     /** line.flags (bits: [LineFlags]) */
     public val lineFlags: Int,
@@ -1809,7 +1809,7 @@ public data class Error(
 
 /** A chunk of the settings struct, in answer to `read_settings` (several chunks, then `ack`). */
 public class SettingsData(
-    /** offset into settings [bytes] */
+    /** offset into settings, in bytes */
     public val offset: Int,
     /** settings bytes */
     public val data: ByteArray,
@@ -1905,7 +1905,7 @@ public class IrReceived(
     public val side: Int,
     /** LED of the sender (see [IrLed]) */
     public val senderLed: Int,
-    /** transmit power of the sender [percent] */
+    /** transmit power of the sender, in percent */
     public val power: Int,
     /** payload */
     public val data: ByteArray,
@@ -2089,7 +2089,7 @@ public data object Heartbeat : Packet {
 public data class SetSync(
     /** none, full or reduced (see [SyncMode]) */
     public val mode: Int,
-    /** period, 1..60000 [ms] */
+    /** period, 1..60000, in ms */
     public val periodMs: Int,
 ) : Packet {
     override val type: Int get() = 18
@@ -2118,7 +2118,7 @@ public data class SetSync(
 
 /** Write whole settings fields: `length` bytes at `offset`. Refused unless the range starts and ends on field boundaries inside the struct and every value is within its min..max. */
 public class UpdateSettings(
-    /** offset into settings [bytes] */
+    /** offset into settings, in bytes */
     public val offset: Int,
     /** new bytes */
     public val data: ByteArray,
@@ -2221,9 +2221,9 @@ public data object LoadDefaults : Packet {
 public data class MoveStraight(
     /** movement id, non-zero, reported in movement_done when it ends */
     public val id: Int,
-    /** distance [m] */
+    /** distance, in m */
     public val distanceM: Float,
-    /** cruise speed, > 0 [m/s] */
+    /** cruise speed, > 0, in m/s */
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 32
@@ -2256,9 +2256,9 @@ public data class MoveStraight(
 public data class MoveRotate(
     /** movement id, non-zero */
     public val id: Int,
-    /** angle [deg] */
+    /** angle, in deg */
     public val angleDeg: Float,
-    /** cruise wheel speed, > 0 [m/s] */
+    /** cruise wheel speed, > 0, in m/s */
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 33
@@ -2291,11 +2291,11 @@ public data class MoveRotate(
 public data class MoveArc(
     /** movement id, non-zero */
     public val id: Int,
-    /** radius of the centre's path, > 0 [m] */
+    /** radius of the centre's path, > 0, in m */
     public val radiusM: Float,
-    /** angle; negative: right turn [deg] */
+    /** angle; negative: right turn, in deg */
     public val angleDeg: Float,
-    /** cruise speed of the centre, > 0 [m/s] */
+    /** cruise speed of the centre, > 0, in m/s */
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 34
@@ -2355,9 +2355,9 @@ public data class Stop(
 
 /** Teleoperation: hold these wheel speeds (per-wheel PID) until the next command or the link failsafe. Ends a running movement (stopped) and drops queued ones. */
 public data class WheelSpeeds(
-    /** left wheel [m/s] */
+    /** left wheel, in m/s */
     public val leftMps: Float,
-    /** right wheel [m/s] */
+    /** right wheel, in m/s */
     public val rightMps: Float,
 ) : Packet {
     override val type: Int get() = 36
@@ -2390,7 +2390,7 @@ public data class LineFollow(
     public val run: Int,
     /** plain or colour segments (see [ColourMode]) */
     public val colourMode: Int,
-    /** cruise speed, 0 = from settings [m/s] */
+    /** cruise speed, 0 = from settings, in m/s */
     public val speedMps: Float,
 ) : Packet {
     override val type: Int get() = 37
@@ -2421,7 +2421,7 @@ public data class LineFollow(
 
 /** Send a payload to nearby robots with the next IR beacons. */
 public class IrSend(
-    /** transmit power, 1..100 [percent] */
+    /** transmit power, 1..100, in percent */
     public val power: Int,
     /** payload */
     public val data: ByteArray,

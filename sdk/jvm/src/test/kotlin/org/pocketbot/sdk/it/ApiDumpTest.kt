@@ -3,6 +3,7 @@ package org.pocketbot.sdk.it
 import org.jetbrains.kotlin.abi.tools.AbiFilters
 import org.jetbrains.kotlin.abi.tools.AbiTools
 import org.junit.jupiter.api.Test
+import org.pocketbot.emulator.Emulator
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.transport.TcpTransport
@@ -12,13 +13,14 @@ import kotlin.test.assertEquals
 import kotlin.test.fail
 
 /**
- * The public API of the SDK is checked in as `sdk/core/api/pocketbot-sdk-core.api`, `sdk/jvm/api/pocketbot-sdk-jvm.api`
- * and `sdk/protocol/api/pocketbot-protocol.api` (the state, settings and enum types users read are generated there
- * from the schema, next to the wire layer, so a schema change shows in review as a change of this dump),
+ * The public API of every published library is checked in beside it: `sdk/core/api/pocketbot-sdk-core.api`,
+ * `sdk/jvm/api/pocketbot-sdk-jvm.api`, `sdk/protocol/api/pocketbot-protocol.api` (the state, settings and enum types
+ * users read are generated there from the schema, next to the wire layer, so a schema change shows in review as a
+ * change of this dump), `emulator/api/pocketbot-emulator.api` and `emulator/simulated/api/pocketbot-emulator-simulated.api`,
  * dumped by the Kotlin toolchain's own ABI tools from the compiled classes and their Kotlin metadata (the format of
  * kotlinx binary-compatibility-validator, which kotlinx.coroutines and Kable keep). `internal` declarations,
- * whatever their JVM visibility, never show. A change to the public surface fails this test until the dump is
- * updated on purpose:
+ * whatever their JVM visibility, never show. The compatibility policy (docs/compatibility.md) is stated in terms of
+ * these files. A change to the public surface fails this test until the dump is updated on purpose:
  *
  *     mvn -B -pl sdk/jvm -am test -Dtest=ApiDumpTest -Dsurefire.failIfNoSpecifiedTests=false -Dpocketbot.api.update=true
  *
@@ -34,8 +36,20 @@ class ApiDumpTest {
     @Test
     fun sdkJvmApiMatchesTheCheckedInDump() = check(TcpTransport::class.java, File("api/pocketbot-sdk-jvm.api"))
 
-    private fun check(anyClass: Class<*>, dumpFile: File) {
-        val actual = dump(anyClass)
+    /** Without the firmware compiled to bytecode: its classes are public for Chicory, and change with every build. */
+    @Test
+    fun emulatorApiMatchesTheCheckedInDump() = check(
+        Emulator::class.java, File("../../emulator/api/pocketbot-emulator.api"),
+        AbiFilters(emptySet(), setOf("org.pocketbot.emulator.firmware.FirmwareModule**"), emptySet(), emptySet()),
+    )
+
+    @Test
+    fun emulatorSimulatedApiMatchesTheCheckedInDump() = check(
+        Class.forName("org.pocketbot.emulator.SimulationKt"), File("../../emulator/simulated/api/pocketbot-emulator-simulated.api"),
+    )
+
+    private fun check(anyClass: Class<*>, dumpFile: File, filters: AbiFilters = AbiFilters.EMPTY) {
+        val actual = dump(anyClass, filters)
         val update = System.getProperty("pocketbot.api.update") == "true" || System.getenv("POCKETBOT_API_UPDATE") == "1"
         if (update) {
             dumpFile.parentFile.mkdirs()
@@ -58,7 +72,7 @@ class ApiDumpTest {
     }
 
     /** The ABI dump of the module [anyClass] was compiled in, from its classes directory or jar. */
-    private fun dump(anyClass: Class<*>): String {
+    private fun dump(anyClass: Class<*>, filters: AbiFilters): String {
         val location = File(anyClass.protectionDomain.codeSource.location.toURI())
         val work = File("target/api-dump/${location.nameWithoutExtension}").apply { deleteRecursively(); mkdirs() }
         val classes = if (location.isDirectory) {
@@ -70,6 +84,6 @@ class ApiDumpTest {
                 }.toList()
             }
         }
-        return StringBuilder().also { AbiTools.getInstance().printJvmDump(it, classes, AbiFilters.EMPTY) }.toString()
+        return StringBuilder().also { AbiTools.getInstance().printJvmDump(it, classes, filters) }.toString()
     }
 }

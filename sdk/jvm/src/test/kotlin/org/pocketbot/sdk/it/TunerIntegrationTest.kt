@@ -1,6 +1,7 @@
 package org.pocketbot.sdk.it
 
 import org.junit.jupiter.api.Test
+import org.pocketbot.emulator.link.LinkSettings
 import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Controller
 import org.pocketbot.sdk.Tuner
@@ -53,7 +54,7 @@ class TunerIntegrationTest {
 
     @Test
     fun aSlowerLinkIsSampledAsFastAsItCarriesAndNoFaster() = withEmulator { emu ->
-        emu.robot(1).link = emu.robot(1).link.copy(baud = 38_400)
+        emu.robot(1).link = LinkSettings(baud = 38_400)
         val robot = connectAll(emu).single()
         val tuner = Tuner(robot)
         assertEquals(12L, tuner.samplePeriod.inWholeMilliseconds, "26-byte frames at 3840 bytes/s, 60 % of the link")

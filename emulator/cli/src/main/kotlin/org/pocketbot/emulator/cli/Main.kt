@@ -51,7 +51,9 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         val pace = if (speed == "max") Speed.AsFastAsPossible
         else Speed.Realtime(speed.toDoubleOrNull()?.takeIf { it > 0 } ?: throw UsageError("--speed wants a positive number or max", "--speed"))
         val w = try { Worlds.load(world) } catch (e: Exception) { throw UsageError("cannot load world $world: ${e.message}", "--world") }
-        val emu = Emulator(w, EmulatorConfig(seed = seed, threads = threads)).also { e -> repeat(robots) { e.addRobot() } }
+        val emu = Emulator(w, EmulatorConfig(seed = seed, threads = threads)).also { e ->
+            try { repeat(robots) { e.addRobot() } } catch (full: IllegalStateException) { e.close(); throw CliktError(full.message) }
+        }
         val control = try {
             emu.startTcp(basePort = portBase, controlPort = controlPort, listen = listen)
         } catch (e: IOException) {
