@@ -126,6 +126,15 @@ void app_tick(void)
     reflector_task();
 }
 
+void app_idle(void)
+{
+    (void)hal_irq_save(); /* hal_idle() enables interrupts again as it sleeps */
+    if (scheduler_tick_due())
+        hal_irq_enable();
+    else
+        hal_idle();
+}
+
 bool app_poll(void)
 {
     if (!scheduler_tick_begin())

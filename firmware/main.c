@@ -3,13 +3,12 @@
  * Entry point on the robot: the main loop sleeps until an interrupt, then runs a tick when one is due.
  */
 #include "app.h"
-#include "hal/hal.h"
 
 int main(void)
 {
     app_init();
     for (;;) {
         if (!app_poll())
-            hal_idle();
+            app_idle();
     }
 }

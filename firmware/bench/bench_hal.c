@@ -22,6 +22,7 @@ void hal_init(void) { bench_set_line_spot(bench_line_spot); }
 void hal_irq_enable(void) { sei(); }
 uint8_t hal_board_id(void) { return 0; }
 void hal_idle(void) {}
+void hal_tick_done(void) {}
 
 uint8_t hal_irq_save(void)
 {
@@ -38,9 +39,9 @@ void hal_irq_restore(uint8_t saved)
 uint32_t hal_micros(void) { return bench_us; }
 uint32_t hal_capture_now(void) { return bench_us * 4u; }
 
-void hal_sched_arm(uint8_t ch, uint32_t at_us)
+void hal_sched_arm(uint8_t ch, uint32_t delay_us)
 {
-    sched_at[ch] = at_us;
+    sched_at[ch] = bench_us + delay_us;
     sched_armed |= (uint8_t)(1u << ch);
 }
 
@@ -99,6 +100,7 @@ int32_t hal_sensor_read(uint8_t sensor)
 }
 
 bool hal_ir_send(const hal_ir_msg_t *msg) { (void)msg; return true; }
+uint32_t hal_ir_message_us(uint8_t len) { return (5u + len) * 11u * 1000000ul / 2400u; } /* the robot's IR link */
 
 void hal_eeprom_read(uint16_t addr, void *dst, uint16_t len)
 {

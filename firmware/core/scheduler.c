@@ -18,15 +18,12 @@ static uint32_t tick_start;
 static uint16_t unreported;
 static uint16_t unreported_longest_us;
 
-static void arm(uint8_t ch)
+/* Arms the channel for its target, `now` being hal_micros() as the caller read it (reading it costs: once per
+ * interrupt is enough). */
+static void arm(uint8_t ch, uint32_t now)
 {
-    channel_t *c = &channels[ch];
-    uint32_t now = hal_micros();
-    int32_t left = (int32_t)(c->target - now);
-    if (left > (int32_t)HAL_SCHED_MAX_DELAY_US)
-        hal_sched_arm(ch, now + HAL_SCHED_MAX_DELAY_US);
-    else
-        hal_sched_arm(ch, c->target);
+    int32_t left = (int32_t)(channels[ch].target - now);
+    hal_sched_arm(ch, left <= 0 ? 0u : left > (int32_t)HAL_SCHED_MAX_DELAY_US ? HAL_SCHED_MAX_DELAY_US : (uint32_t)left);
 }
 
 uint16_t scheduler_period_us(void)
@@ -65,7 +62,7 @@ void scheduler_after(uint8_t ch, uint32_t delay_us, scheduler_cb_t cb)
     c->cb = cb;
     c->target = hal_micros() + delay_us;
     c->active = 1;
-    arm(ch);
+    hal_sched_arm(ch, delay_us > HAL_SCHED_MAX_DELAY_US ? HAL_SCHED_MAX_DELAY_US : delay_us);
     hal_irq_restore(s);
 }
 
@@ -73,13 +70,14 @@ void scheduler_again(uint8_t ch, uint32_t period_us, scheduler_cb_t cb)
 {
     uint8_t s = hal_irq_save();
     channel_t *c = &channels[ch];
+    uint32_t now = hal_micros();
     c->cb = cb;
     c->target = c->fired + period_us;
     /* After a long stall, restart from now rather than firing a burst of stale events. */
-    if ((int32_t)(c->target - hal_micros()) < -(int32_t)period_us)
-        c->target = hal_micros() + period_us;
+    if ((int32_t)(c->target - now) < -(int32_t)period_us)
+        c->target = now + period_us;
     c->active = 1;
-    arm(ch);
+    arm(ch, now);
     hal_irq_restore(s);
 }
 
@@ -98,8 +96,9 @@ void scheduler_isr(uint8_t ch)
     channel_t *c = &channels[ch];
     if (!c->active)
         return;
-    if ((int32_t)(c->target - hal_micros()) > 0) { /* an intermediate wake-up of a long delay */
-        arm(ch);
+    uint32_t now = hal_micros();
+    if ((int32_t)(c->target - now) > 0) { /* an intermediate wake-up of a long delay */
+        arm(ch, now);
         return;
     }
     c->active = 0;
@@ -113,6 +112,11 @@ bool scheduler_tick_begin(void)
         return false;
     tick_start = hal_micros();
     return true;
+}
+
+bool scheduler_tick_due(void)
+{
+    return ticks_pending != 0;
 }
 
 void scheduler_tick_end(void)

@@ -35,6 +35,9 @@ void scheduler_cancel(uint8_t ch);
 /** \return true (once per tick) when a main loop tick is due; call scheduler_tick_end() when done. */
 bool scheduler_tick_begin(void);
 
+/** \return true when a main loop tick is due (nothing else: the main loop asks before it sleeps). */
+bool scheduler_tick_due(void);
+
 /** Ends a tick: measures its duration into robot_state.time.tick_max_us and counts overruns (a tick that
  *  took longer than the period, or a tick that came due while the previous one still ran) in
  *  robot_state.time.overruns and .last_overrun_ms. */

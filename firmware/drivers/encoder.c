@@ -25,8 +25,10 @@ void encoder_capture_isr(uint8_t wheel, uint32_t timestamp)
     if (wheel > 1)
         return;
     volatile encoder_snapshot_t *e = &enc[wheel];
-    e->count += e->dir;
     uint32_t p = timestamp - e->last;
+    if (have_last[wheel] != LAST_NONE && p < ENCODER_MIN_EDGE_US * (HAL_CAPTURE_HZ / 1000000ul))
+        return; /* chatter */
+    e->count += e->dir;
     /* The first edge after a reversal: the wheel still rolls the old way (the time since the last edge is a
      * period of that travel), or it has turned round and crossed the stripe edge it stopped just past once more.
      * Then it comes far sooner than the last period before the reversal (a wheel slows down to turn round):

@@ -63,12 +63,14 @@ void sensors_task(void)
         uint8_t r = to_u8(hal_sensor_read(HAL_SENSOR_COLOUR_R));
         uint8_t g = to_u8(hal_sensor_read(HAL_SENSOR_COLOUR_G));
         uint8_t b = to_u8(hal_sensor_read(HAL_SENSOR_COLOUR_B));
-        uint8_t c = to_u8(hal_sensor_read(HAL_SENSOR_COLOUR_CLEAR));
+        int32_t clear = hal_sensor_read(HAL_SENSOR_COLOUR_CLEAR);
+        uint8_t c = to_u8(clear);
         robot_state.colour.red = r;
         robot_state.colour.green = g;
         robot_state.colour.blue = b;
         robot_state.colour.clear = c;
-        robot_state.colour.detected = sensors_classify(r, g, b, c);
+        /* no reading (the sensor does not answer): no colour, rather than black */
+        robot_state.colour.detected = clear < 0 ? PB_COLOUR_UNKNOWN : sensors_classify(r, g, b, c);
         break;
     }
     }

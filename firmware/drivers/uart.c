@@ -35,6 +35,12 @@ void uart_rx_isr(uint8_t byte)
     rx_head = next;
 }
 
+void uart_rx_error_isr(uint8_t errors)
+{
+    (void)errors; /* an overrun lost bytes before the next one, a frame error loses that byte: one each, at least */
+    rx_lost++;
+}
+
 bool uart_getc(uint8_t *byte)
 {
     uint8_t t = rx_tail;

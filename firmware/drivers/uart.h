@@ -36,7 +36,8 @@ static inline uint8_t uart_tx_store(uint8_t pos, uint8_t byte)
 /** Starts the transmitter on what was queued. */
 void uart_tx_flush(void);
 
-/** \return bytes lost because the receive buffer was full (since reset). */
+/** \return bytes lost on receive since reset: to a full receive buffer, or by the USART itself (an overrun, or
+ *  a frame error, whose byte is dropped; each counts one though an overrun may lose more). */
 uint16_t uart_rx_overflows(void);
 
 #endif

@@ -38,19 +38,16 @@ void hal_irq_enable(void);
 /** \return a robot id imposed by the board (the emulator), or 0 to use settings.identity.robot_id. */
 uint8_t hal_board_id(void);
 
-/** Waits for the next interrupt (sleep mode idle); returns at once where there is nothing to wait for. */
+/** Sleeps until the next interrupt (sleep mode idle). Call it with interrupts masked (hal_irq_save()) after
+ *  finding nothing to do: it enables them and sleeps in one step, so an interrupt that came after the check wakes
+ *  it at once instead of being slept through. Returns with interrupts enabled; at once where there is nothing to
+ *  wait for. */
 void hal_idle(void);
 
-/** Called at the end of every main loop tick, before the scheduler measures how long it took. Only the
- *  emulator's HAL (built with HAL_SIM) does something: code takes no simulated time there, and a test can
- *  make a tick last (sim_host_stretch_tick_us()). Elsewhere it compiles to nothing. */
-#ifdef HAL_SIM
+/** Called at the end of every main loop tick, before the scheduler measures how long it took. The robot's HAL
+ *  resets its watchdog here (a main loop that stops ending ticks resets the MCU); the emulator's (HAL_SIM) lets a
+ *  test make a tick last (code takes no simulated time there: sim_host_stretch_tick_us()). */
 void hal_tick_done(void);
-#else
-static inline void hal_tick_done(void)
-{
-}
-#endif
 
 /** Masks interrupts; \return the previous state for hal_irq_restore(). */
 uint8_t hal_irq_save(void);
@@ -66,9 +63,9 @@ uint32_t hal_micros(void);
 /** Longest delay hal_sched_arm() accepts from now; the scheduler re-arms for longer ones. */
 #define HAL_SCHED_MAX_DELAY_US 60000ul
 
-/** Arms compare channel `ch` to call scheduler_isr(ch) once when hal_micros() reaches `at_us`.
- *  A time already past fires as soon as possible. */
-void hal_sched_arm(uint8_t ch, uint32_t at_us);
+/** Arms compare channel `ch` to call scheduler_isr(ch) once, `delay_us` from now (at most
+ *  HAL_SCHED_MAX_DELAY_US; 0: as soon as possible). Relative, so that the HAL needs no time of its own. */
+void hal_sched_arm(uint8_t ch, uint32_t delay_us);
 void hal_sched_disarm(uint8_t ch);
 /** Compare interrupt of channel `ch`. */
 void scheduler_isr(uint8_t ch);
@@ -93,6 +90,11 @@ void hal_motors_set(int16_t left, int16_t right);
 void hal_uart_tx_kick(void);
 /** A received byte. */
 void uart_rx_isr(uint8_t byte);
+/** What the USART saw wrong before the byte it delivers next (or instead of it): */
+#define HAL_UART_OVERRUN 0x01u /**< bytes were lost: the receiver's buffer was full (the next byte is delivered) */
+#define HAL_UART_FRAME 0x02u   /**< a byte with a bad stop bit (noise, another baud rate, a break): not delivered */
+/** Receive errors (HAL_UART_* bits), from the receive interrupt, just before uart_rx_isr() of the next byte. */
+void uart_rx_error_isr(uint8_t errors);
 /** \return the next byte to transmit, or -1 when none is queued. */
 int16_t uart_tx_isr(void);
 
@@ -116,12 +118,17 @@ enum hal_sensor {
     HAL_SENSOR_COUNT
 };
 /** \return the latest value of a sensor in its physical unit (never blocks: conversions run in the
- *  background). */
+ *  background); colour channels 0..255 of full scale, or -1 while the colour sensor gives no reading (it does not
+ *  answer). */
 int32_t hal_sensor_read(uint8_t sensor);
 
 /* ---- IR proximity --------------------------------------------------------------------------- */
 
 #define HAL_IR_PAYLOAD_MAX 8u
+/** \return how long the transmitter is busy with a message of `len` payload bytes (us): hal_ir_send() refuses
+ *  another one until then. On the robot, its frames on the IR link (5 + len bytes of 11 bits at 2400 Bd: 23 ms
+ *  without payload); in the emulator, whose IR link delivers a message without airtime, 1 ms. */
+uint32_t hal_ir_message_us(uint8_t len);
 /** One IR message: who sent it, from which LED, at what power, with an optional payload. */
 typedef struct {
     uint8_t sender_id;

@@ -27,7 +27,9 @@ typedef struct {
 } side_t;
 
 static side_t sides[2];
-static uint16_t published_hold; /* settings.proximity.hold_ms at the last publish() */
+static uint16_t hold;           /* how long a sighting is held: hold_for() */
+static uint8_t hold_gen;        /* settings_generation it was computed for */
+static uint16_t published_hold; /* hold at the last publish() */
 
 /* Beacon transmission, driven from the scheduler interrupts. */
 static volatile uint8_t burst_msg;    /* next message of the running beacon */
@@ -56,6 +58,24 @@ uint8_t proximity_distance_class(uint8_t power)
     return PB_DISTANCE_CLASS_FAR;
 }
 
+/* The time from one message of a beacon to the next: the message on the IR link, then a pause. */
+static uint32_t message_slot_us(uint8_t len)
+{
+    return hal_ir_message_us(len) + PROXIMITY_MSG_GAP_US;
+}
+
+/* hold_ms, but at least a cycle of the three beacon powers and a period: held shorter, a distance class would
+ * lapse between two beacons of its power. On the robot a beacon takes 96 ms on the IR link, so at the default
+ * 40 ms period beacons go every 120 ms and a cycle takes 360 ms. */
+static uint16_t hold_for(void)
+{
+    uint16_t period = settings.proximity.beacon_period_ms < 10u ? 10u : settings.proximity.beacon_period_ms;
+    uint32_t airtime_ms = LEDS * message_slot_us(0) / 1000u;
+    uint32_t beacon_ms = (airtime_ms + period - 1u) / period * period; /* a beacon outlasting the period skips one */
+    uint32_t least = LEVELS * beacon_ms + period;
+    return settings.proximity.hold_ms > least ? settings.proximity.hold_ms : (uint16_t)least;
+}
+
 static void send_next(void)
 {
     uint8_t k = burst_msg;
@@ -76,13 +96,13 @@ static void send_next(void)
         m.led = (uint8_t)(k - LEDS);
     }
     if (!ir_transmit(&m)) { /* transmitter still busy: try again shortly */
-        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_SPACING_US / 4u, send_next);
+        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_GAP_US, send_next);
         return;
     }
     robot_state.indicators.ir_power = m.power;
     burst_msg = (uint8_t)(k + 1u);
     if (burst_msg < burst_msgs)
-        scheduler_after(SCHED_CH_PROX_TX, PROXIMITY_MSG_SPACING_US, send_next);
+        scheduler_after(SCHED_CH_PROX_TX, message_slot_us(m.len), send_next);
     else if (payload_in_burst)
         payload_pending = payload_in_burst = 0;
 }
@@ -114,7 +134,9 @@ void proximity_init(void)
 {
     memset(sides, 0, sizeof sides);
     sides[0].dirty = sides[1].dirty = 1;
-    published_hold = settings.proximity.hold_ms;
+    hold_gen = settings_generation;
+    hold = hold_for();
+    published_hold = hold;
     memset(&last_fwd, 0, sizeof last_fwd);
     burst_msg = burst_msgs = 0;
     level = 0;
@@ -146,8 +168,11 @@ uint8_t proximity_send_payload(uint8_t power, const uint8_t *data, uint8_t len)
 
 static void forward_payload(uint8_t side, const hal_ir_msg_t *m, uint32_t now)
 {
+    /* The copies of a payload from the four LEDs of one beacon come within its messages' slots. */
+    uint32_t copies_ms = LEDS * (message_slot_us(HAL_IR_PAYLOAD_MAX) / 1000u + 1u);
     if (last_fwd.sender == m->sender_id && last_fwd.len == m->len && memcmp(last_fwd.data, m->data, m->len) == 0 &&
-        now - last_fwd.ms < settings.proximity.beacon_period_ms)
+        now - last_fwd.ms < (copies_ms > settings.proximity.beacon_period_ms ? copies_ms
+                                                                           : settings.proximity.beacon_period_ms))
         return;
     last_fwd.sender = m->sender_id;
     last_fwd.len = m->len;
@@ -171,7 +196,6 @@ static void forward_pending(void)
 static void heard(uint8_t side_no, const hal_ir_msg_t *m, uint32_t now)
 {
     side_t *s = &sides[side_no];
-    uint16_t hold = settings.proximity.hold_ms;
     s->dirty = 1;
     if (m->sender_id == settings.identity.robot_id) {
         s->obstacle_ms = now;
@@ -220,7 +244,6 @@ static inline __attribute__((always_inline)) bool live(uint32_t t, uint32_t now,
 
 static void publish(pb_proximity_side_t *out, side_t *s, uint32_t now)
 {
-    uint16_t hold = settings.proximity.hold_ms;
     uint16_t oldest = 0;
     uint8_t flags = 0;
     if (s->heard_obstacle && live(s->obstacle_ms, now, hold, &oldest))
@@ -262,8 +285,12 @@ void proximity_task(void)
         heard(side, m, now);
         ir_pop();
     }
-    bool hold_changed = published_hold != settings.proximity.hold_ms;
-    published_hold = settings.proximity.hold_ms;
+    if (hold_gen != settings_generation) {
+        hold_gen = settings_generation;
+        hold = hold_for();
+    }
+    bool hold_changed = published_hold != hold;
+    published_hold = hold;
     publish_if_changed(&robot_state.proximity.front, &sides[0], now, hold_changed);
     publish_if_changed(&robot_state.proximity.rear, &sides[1], now, hold_changed);
 }

@@ -17,8 +17,10 @@
 
 #include "hal/hal.h"
 
-/** Time between the messages of one beacon (the transmitter's message length on the robot). */
-#define PROXIMITY_MSG_SPACING_US 2000u
+/** The pause between the messages of a beacon: each message takes its time on the IR link (hal_ir_message_us():
+ *  23 ms without payload on the robot), then the LEDs rest this long. A beacon that outlasts beacon_period_ms
+ *  delays the next one to the following period; a sighting is held at least a cycle of the beacon powers. */
+#define PROXIMITY_MSG_GAP_US 1000u
 
 /** Starts the beacons and registers `ir_send` with comm. */
 void proximity_init(void);

@@ -279,7 +279,7 @@ PB_STATIC_ASSERT(offsetof(pb_settings_motors_t, pwm_limit) == 0, "pb_settings_mo
 typedef struct PB_PACKED {
     uint8_t ir_power; /**< highest beacon power; 0 turns the beacon off [percent] */
     uint16_t beacon_period_ms; /**< period of IR beacons [ms] */
-    uint16_t hold_ms; /**< how long a sighting stays in the state [ms] */
+    uint16_t hold_ms; /**< how long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link) [ms] */
 } pb_settings_proximity_t;
 PB_STATIC_ASSERT(sizeof(pb_settings_proximity_t) == 5, "pb_settings_proximity_t size");
 PB_STATIC_ASSERT(offsetof(pb_settings_proximity_t, ir_power) == 0, "pb_settings_proximity_t.ir_power offset");
@@ -452,7 +452,7 @@ typedef struct PB_PACKED {
     uint16_t crc; /**< frames whose CRC failed */
     uint16_t framing; /**< runs of received bytes (between two ENDs) that made no frame: bad SLIP, shorter than 5 or longer than 125 bytes */
     uint16_t rejected; /**< frames with a sound CRC that were refused, for any reason */
-    uint16_t rx_overflow; /**< bytes lost to a full receive buffer */
+    uint16_t rx_overflow; /**< received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped) */
     uint16_t tx_dropped; /**< packets not sent because the transmit buffer was full */
 } pb_state_errors_t;
 PB_STATIC_ASSERT(sizeof(pb_state_errors_t) == 10, "pb_state_errors_t size");

@@ -22,6 +22,8 @@ extern int harness_failed_checks;
 
 #define RUN(fn) harness_run(#fn, fn)
 void harness_run(const char *name, void (*fn)(void));
+/** Prints "N passed, N failed". \return the exit status: non-zero when a test failed */
+int harness_report(void);
 
 /* The suites, one per test file. */
 void suite_frame(void);

@@ -79,13 +79,12 @@ uint32_t hal_micros(void)
     return (uint32_t)(uint64_t)(now_ticks / TICKS_PER_US);
 }
 
-void hal_sched_arm(uint8_t ch, uint32_t at_us)
+void hal_sched_arm(uint8_t ch, uint32_t delay_us)
 {
     if (ch >= HAL_SCHED_CHANNELS)
         return;
-    int32_t ahead = (int32_t)(at_us - hal_micros());
-    int64_t base = (now_ticks / TICKS_PER_US) * TICKS_PER_US;
-    deadline[ch] = ahead > 0 ? base + (int64_t)ahead * TICKS_PER_US : now_ticks;
+    int64_t base = (now_ticks / TICKS_PER_US) * TICKS_PER_US; /* whole microseconds, as hal_micros() counts them */
+    deadline[ch] = delay_us > 0 ? base + (int64_t)delay_us * TICKS_PER_US : now_ticks;
     armed[ch] = 1;
 }
 
@@ -182,6 +181,14 @@ int32_t hal_sensor_read(uint8_t sensor)
     if (sensor >= HAL_SENSOR_COLOUR_R)
         return clamp_i32(r, 0, 255);
     return r;
+}
+
+/* The emulator delivers a message the step after it is sent, without airtime (its IR link is a model of reach and
+ * obstacles, not of timing): the firmware keeps the 2 ms spacing it has always had there. */
+uint32_t hal_ir_message_us(uint8_t len)
+{
+    (void)len;
+    return 1000u;
 }
 
 bool hal_ir_send(const hal_ir_msg_t *m)

@@ -187,7 +187,7 @@ public class ProximitySettings internal constructor(s: SettingsBase) {
     /** Period of IR beacons (10..10000, ms). Setting `proximity.beacon_period_ms`. */
     public val beaconPeriodMs: IntSetting = s.int("proximity.beacon_period_ms")
 
-    /** How long a sighting stays in the state (10..10000, ms). Setting `proximity.hold_ms`. */
+    /** How long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link) (10..10000, ms). Setting `proximity.hold_ms`. */
     public val holdMs: IntSetting = s.int("proximity.hold_ms")
 }
 

@@ -779,7 +779,7 @@ public class SettingsProximity(
     public val irPower: Int,
     /** period of IR beacons, in ms */
     public val beaconPeriodMs: Int,
-    /** how long a sighting stays in the state, in ms */
+    /** how long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link), in ms */
     public val holdMs: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
@@ -1363,7 +1363,7 @@ public class StateErrors(
     public val framing: Int,
     /** frames with a sound CRC that were refused, for any reason */
     public val rejected: Int,
-    /** bytes lost to a full receive buffer */
+    /** received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped) */
     public val rxOverflow: Int,
     /** packets not sent because the transmit buffer was full */
     public val txDropped: Int,
@@ -2695,7 +2695,7 @@ public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
     SettingsFieldInfo("motors.pwm_limit", 159, FieldType.U16, 1, 0.0, 1000.0, "permille", "largest PWM duty the controllers may command"),
     SettingsFieldInfo("proximity.ir_power", 161, FieldType.U8, 1, 0.0, 100.0, "percent", "highest beacon power; 0 turns the beacon off"),
     SettingsFieldInfo("proximity.beacon_period_ms", 162, FieldType.U16, 1, 10.0, 10000.0, "ms", "period of IR beacons"),
-    SettingsFieldInfo("proximity.hold_ms", 164, FieldType.U16, 1, 10.0, 10000.0, "ms", "how long a sighting stays in the state"),
+    SettingsFieldInfo("proximity.hold_ms", 164, FieldType.U16, 1, 10.0, 10000.0, "ms", "how long a sighting stays in the state; the robot holds it at least a cycle of the three beacon powers and a period (400 ms at the defaults, its beacons taking 96 ms on the IR link)"),
     SettingsFieldInfo("track.speed_mps", 166, FieldType.F32, 1, 0.03, 0.3, "m/s", "cruise speed on the line"),
     SettingsFieldInfo("track.token_boost_percent", 170, FieldType.U8, 1, 0.0, 100.0, "percent", "the token holder drives this much faster until it has handed the token on, so that it catches up with the robot ahead"),
     SettingsFieldInfo("track.token_origin_id", 171, FieldType.U8, 1, 0.0, 254.0, "", "the robot with this id creates the token at its first start; 0: none does"),
