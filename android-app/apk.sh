@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the PocketBot APK without Gradle (Maven calls this; see pom.xml):
 #
-#   apk.sh resources                      aapt2: res/ and the manifest -> $BUILD_DIR/resources.ap_ (+ R8 keep rules)
+#   apk.sh resources                      aapt2: res/ and the manifest (merged: + uses-sdk) -> $BUILD_DIR/resources.ap_
 #   apk.sh package CLASSES CLASSPATH      R8 -> dex, the APK, zipalign, a debug signature, then its checks
 #
 # Environment (set by the pom): ANDROID_JAR (android-all of API 35: the platform to link and compile against),
@@ -34,9 +34,13 @@ resources() {
   # against the same table rewritten in the older encoding (tools/arsc-compat.py).
   local platform="$BUILD_DIR/android-$TARGET_SDK-resources.jar"
   [ "$platform" -nt "$ANDROID_JAR" ] || python3 "$HERE/tools/arsc-compat.py" "$ANDROID_JAR" "$platform"
+  # The build's manifest, as Android's manifest merger writes it: the source with this build's SDK levels. The
+  # Robolectric tests read it too (test_config.properties), so they run the app as the phone does: targeting 35.
+  awk -v sdk="    <uses-sdk android:minSdkVersion=\"$MIN_SDK\" android:targetSdkVersion=\"$TARGET_SDK\" />" \
+    '/^ *<!--|^ *<(uses-|application)/ && !done { print sdk; print ""; done = 1 } { print }' \
+    "$HERE/src/main/AndroidManifest.xml" >"$BUILD_DIR/AndroidManifest.xml"
   aapt2 link -o "$BUILD_DIR/resources.ap_" -I "$platform" \
-    --manifest "$HERE/src/main/AndroidManifest.xml" \
-    --min-sdk-version "$MIN_SDK" --target-sdk-version "$TARGET_SDK" \
+    --manifest "$BUILD_DIR/AndroidManifest.xml" \
     --version-code "$VERSION_CODE" --version-name "$VERSION_NAME" \
     --proguard "$BUILD_DIR/aapt-rules.pro" \
     "$BUILD_DIR/res.zip" 2> >(grep -v "Unknown chunk type" >&2) # chunks newer than Android 10 it need not read

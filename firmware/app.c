@@ -87,6 +87,7 @@ void app_init(void)
     comm_init(); /* first: the modules register their packet handlers in their inits */
     bool from_eeprom = settings_init();
     uart_init();
+    comm_link_open(0, &comm_uart_link); /* a serial link is open from reset: the robot cannot see its host come */
     encoder_init();
     motors_init();
     speed_init();

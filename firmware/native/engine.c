@@ -223,7 +223,8 @@ jobject EXPORT(memory)(JNIEnv *env, jclass cls, jlong handle)
     return (*env)->NewDirectByteBuffer(env, m->data, (jlong)m->size);
 }
 
-/* The address exports of sim_abi.h, numbered as NativeEngine.ADDRESS_*. */
+/* The exports of sim_abi.h that take nothing and return an int (the addresses, sim_links), numbered as
+ * NativeEngine.ADDRESSES. */
 jint EXPORT(address)(JNIEnv *env, jclass cls, jlong handle, jint which)
 {
     (void)cls;
@@ -238,6 +239,7 @@ jint EXPORT(address)(JNIEnv *env, jclass cls, jlong handle, jint which)
         case 5: a = Z_pocketbotZ_sim_settings(i); break;
         case 6: a = Z_pocketbotZ_sim_uart_tx_buffer(i); break;
         case 7: a = Z_pocketbotZ_sim_eeprom(i); break;
+        case 8: a = Z_pocketbotZ_sim_links(i); break;
         default: break;
     });
     return (jint)a;
@@ -278,6 +280,14 @@ jint EXPORT(uartTxTake)(JNIEnv *env, jclass cls, jlong handle, jint max)
     (void)cls;
     volatile u32 n = 0;
     GUARDED(env, n = Z_pocketbotZ_sim_uart_tx_take(INSTANCE(handle), (u32)max));
+    return (jint)n;
+}
+
+jint EXPORT(linkTxTake)(JNIEnv *env, jclass cls, jlong handle, jint link, jint max)
+{
+    (void)cls;
+    volatile u32 n = 0;
+    GUARDED(env, n = Z_pocketbotZ_sim_link_tx_take(INSTANCE(handle), (u32)link, (u32)max));
     return (jint)n;
 }
 

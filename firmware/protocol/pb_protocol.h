@@ -19,11 +19,11 @@
 #define PB_FLASH
 #endif
 
-#define PB_PROTOCOL_VERSION 2
+#define PB_PROTOCOL_VERSION 3
 #define PB_FW_MAJOR 0
 #define PB_FW_MINOR 1
 #define PB_FW_PATCH 0
-#define PB_LAYOUT_HASH 0xC4D4A61DUL
+#define PB_LAYOUT_HASH 0x14AF42C3UL
 #define PB_FRAME_HEADER_SIZE 3
 #define PB_FRAME_CRC_SIZE 2
 #define PB_MAX_PAYLOAD 120
@@ -89,12 +89,30 @@
 #define PB_ERROR_CODE_FRAMING 10
 #define PB_ERROR_CODE_BUSY 11
 #define PB_ERROR_CODE_BAD_SEQUENCE 12
+#define PB_ERROR_CODE_NOT_DRIVER 13
+#define PB_ERROR_CODE_NO_FREE_LINK 14
 
 /* movement_outcome: How a queued movement ended (movement_done, movement_log). */
 #define PB_MOVEMENT_OUTCOME_FINISHED 0
 #define PB_MOVEMENT_OUTCOME_STOPPED 1
 #define PB_MOVEMENT_OUTCOME_FAILSAFE 2
 #define PB_MOVEMENT_OUTCOME_DROPPED 3
+
+/* host_role: What a host asks to be (`set_role`) and what it is (`driver`). */
+#define PB_HOST_ROLE_WATCH 0
+#define PB_HOST_ROLE_DRIVE 1
+#define PB_HOST_ROLE_TAKE_OVER 2
+
+/* driver_change: Why the robot sends `driver`. */
+#define PB_DRIVER_CHANGE_NONE 0
+#define PB_DRIVER_CHANGE_CLAIMED 1
+#define PB_DRIVER_CHANGE_TAKEN_OVER 2
+#define PB_DRIVER_CHANGE_LEFT 3
+#define PB_DRIVER_CHANGE_LOST 4
+
+/* leave_queue: What the robot does with what the leaving driver queued (`goodbye`). */
+#define PB_LEAVE_QUEUE_FINISH 0
+#define PB_LEAVE_QUEUE_DROP 1
 
 /* debug_module: The firmware module that wrote a debug text. */
 #define PB_DEBUG_MODULE_MAIN 0
@@ -145,8 +163,11 @@
 #define PB_PKT_IR_RECEIVED 0x08 /**< r2h */
 #define PB_PKT_MOVEMENT_DONE 0x09 /**< r2h */
 #define PB_PKT_MOVEMENT_LOG 0x0A /**< r2h */
+#define PB_PKT_DRIVER 0x0B /**< r2h */
 #define PB_PKT_HELLO_REQUEST 0x10 /**< h2r */
 #define PB_PKT_HEARTBEAT 0x11 /**< h2r */
+#define PB_PKT_SET_ROLE 0x17 /**< h2r, acked */
+#define PB_PKT_GOODBYE 0x18 /**< h2r, acked */
 #define PB_PKT_SET_SYNC 0x12 /**< h2r, acked */
 #define PB_PKT_UPDATE_SETTINGS 0x13 /**< h2r, acked */
 #define PB_PKT_READ_SETTINGS 0x14 /**< h2r, acked */
@@ -199,7 +220,7 @@ PB_STATIC_ASSERT(offsetof(pb_settings_identity_t, name) == 1, "pb_settings_ident
 
 /** State reflection: what the robot sends on its own, and how often. */
 typedef struct PB_PACKED {
-    uint8_t mode; /**< full, reduced or no state packets */
+    uint8_t mode; /**< none, full or reduced state packets */
     uint16_t period_ms; /**< period of state packets [ms] */
 } pb_settings_sync_t;
 PB_STATIC_ASSERT(sizeof(pb_settings_sync_t) == 3, "pb_settings_sync_t size");
@@ -686,7 +707,21 @@ PB_STATIC_ASSERT(offsetof(pb_movement_log_t, outcomes) == 36, "pb_movement_log_t
 PB_STATIC_ASSERT(offsetof(pb_movement_log_t, done) == 52, "pb_movement_log_t.done offset");
 #define PB_MOVEMENT_LOG_SIZE 116
 
-/** Ask for `hello`; starts a new host session unless `session` is the one the robot serves. */
+/** Who drives the robot, to one link: in answer to `set_role` (before its `ack`), after a command refused with `not_driver`, and to every link when the driver changes. */
+typedef struct PB_PACKED {
+    uint8_t role; /**< this link's role now: watch or drive */
+    uint8_t change; /**< what changed */
+    char label[16]; /**< the label the driving host gave in `set_role`; empty when no host drives */
+    uint32_t time_ms; /**< robot time now (lower than a host saw before: the robot was reset meanwhile) [ms] */
+} pb_driver_t;
+PB_STATIC_ASSERT(sizeof(pb_driver_t) == 22, "pb_driver_t size");
+PB_STATIC_ASSERT(offsetof(pb_driver_t, role) == 0, "pb_driver_t.role offset");
+PB_STATIC_ASSERT(offsetof(pb_driver_t, change) == 1, "pb_driver_t.change offset");
+PB_STATIC_ASSERT(offsetof(pb_driver_t, label) == 2, "pb_driver_t.label offset");
+PB_STATIC_ASSERT(offsetof(pb_driver_t, time_ms) == 18, "pb_driver_t.time_ms offset");
+#define PB_DRIVER_SIZE 22
+
+/** Ask for `hello`; starts a new host session on this link unless `session` is one the robot serves (on this link or, after a reconnect, another). */
 typedef struct PB_PACKED {
     uint16_t host_protocol_version; /**< protocol version of the host */
     uint32_t session; /**< drawn at random (non-zero) when the host starts, kept across its reconnects; 0 = no session */
@@ -701,6 +736,24 @@ typedef struct PB_PACKED {
 } pb_heartbeat_t;
 PB_STATIC_ASSERT(sizeof(pb_heartbeat_t) == 0, "pb_heartbeat_t size");
 #define PB_HEARTBEAT_SIZE 0
+
+/** Drive, watch or take over the robot, under a short label that other hosts are shown (e.g. `panel@lab-pc`). Answered by `driver` (the role this link got), then `ack`. */
+typedef struct PB_PACKED {
+    uint8_t role; /**< watch, drive (if no host drives) or take over */
+    char label[16]; /**< who this host is, for people: `<program>@<computer>` */
+} pb_set_role_t;
+PB_STATIC_ASSERT(sizeof(pb_set_role_t) == 17, "pb_set_role_t size");
+PB_STATIC_ASSERT(offsetof(pb_set_role_t, role) == 0, "pb_set_role_t.role offset");
+PB_STATIC_ASSERT(offsetof(pb_set_role_t, label) == 1, "pb_set_role_t.label offset");
+#define PB_SET_ROLE_SIZE 17
+
+/** The host leaves on purpose: the robot finishes or drops what it queued (the driver's choice) instead of the failsafe stopping it, and the drive is free. From a watcher it changes nothing. */
+typedef struct PB_PACKED {
+    uint8_t queue; /**< finish or drop the queued movements */
+} pb_goodbye_t;
+PB_STATIC_ASSERT(sizeof(pb_goodbye_t) == 1, "pb_goodbye_t size");
+PB_STATIC_ASSERT(offsetof(pb_goodbye_t, queue) == 0, "pb_goodbye_t.queue offset");
+#define PB_GOODBYE_SIZE 1
 
 /** Choose the state reflection mode and period (also stored in settings.sync). */
 typedef struct PB_PACKED {
@@ -782,7 +835,7 @@ PB_STATIC_ASSERT(offsetof(pb_move_arc_t, angle_deg) == 6, "pb_move_arc_t.angle_d
 PB_STATIC_ASSERT(offsetof(pb_move_arc_t, speed_mps) == 10, "pb_move_arc_t.speed_mps offset");
 #define PB_MOVE_ARC_SIZE 14
 
-/** Stop: the running movement brakes on the profile (at once when `immediate`) and ends as stopped, queued ones are dropped; also ends teleoperation and line following. */
+/** Stop: the running movement brakes on the profile (at once when `immediate`) and ends as stopped, queued ones are dropped; also ends teleoperation and line following. Obeyed from every host, watchers included: anyone who sees a robot may stop it; the drive stays where it was. */
 typedef struct PB_PACKED {
     uint8_t immediate; /**< 1: motors off at once */
 } pb_stop_t;
@@ -839,11 +892,12 @@ PB_STATIC_ASSERT(sizeof(pb_read_movements_t) == 0, "pb_read_movements_t size");
 #define PB_READ_MOVEMENTS_SIZE 0
 
 /* Tables (pb_protocol_tables.c) */
-/** A packet type: payload size bounds, direction, acknowledged, idempotent (a read: answered every time). */
-typedef struct { uint8_t type; uint8_t min_size; uint8_t max_size; uint8_t dir; uint8_t needs_ack; uint8_t idempotent; } pb_packet_info_t;
+/** A packet type: payload size bounds, direction, acknowledged, idempotent (a read: answered every time),
+ *  watcher_ok (obeyed from a host that only watches). */
+typedef struct { uint8_t type; uint8_t min_size; uint8_t max_size; uint8_t dir; uint8_t needs_ack; uint8_t idempotent; uint8_t watcher_ok; } pb_packet_info_t;
 #define PB_DIR_R2H 0
 #define PB_DIR_H2R 1
-#define PB_PACKET_INFO_COUNT 26
+#define PB_PACKET_INFO_COUNT 29
 extern const PB_FLASH pb_packet_info_t pb_packet_info[PB_PACKET_INFO_COUNT];
 
 enum { PB_FIELD_U8, PB_FIELD_I8, PB_FIELD_U16, PB_FIELD_I16, PB_FIELD_U32, PB_FIELD_I32, PB_FIELD_F32, PB_FIELD_CHAR };

@@ -40,6 +40,7 @@ void suite_sensors(void);
 void suite_debug(void);
 void suite_scheduler(void);
 void suite_track(void);
+void suite_links(void);
 
 /** Writes the golden frames (SLIPped) as fuzz corpus files into `dir`. */
 void golden_write_corpus(const char *dir);

@@ -23,5 +23,6 @@ int main(int argc, char **argv)
     suite_debug();
     suite_scheduler();
     suite_track();
+    suite_links();
     return harness_report();
 }

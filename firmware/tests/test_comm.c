@@ -33,7 +33,7 @@ static void hello_request(uint32_t session)
 
 static void hello_at_reset_and_on_request(void)
 {
-    world_reset(5);
+    world_power_on(5);
     world_run_ms(2);
     host_collect();
     pb_hello_t h;
@@ -111,7 +111,10 @@ static void a_full_transmit_buffer_skips_and_counts(void)
 static void retransmitted_command_is_acked_but_not_executed_twice(void)
 {
     world_reset(1);
-    hello_request(0xABCD);
+    host_handshake(0xABCD, PB_HOST_ROLE_TAKE_OVER, "other@host");
+    world_run_ms(1);
+    host_collect();
+    host_clear();
     pb_move_straight_t m = {1, 0.05f, 0.1f};
     host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m);
     host_send(PB_PKT_MOVE_STRAIGHT, 42, &m, sizeof m); /* identical: a retransmission */
@@ -147,7 +150,7 @@ static void two_hosts_in_turn_get_every_command_executed(void)
     /* Host A, then host B with the same sequence numbers and the same (identical!) frames: each is a new
      * session, so nothing B sends is taken for A's. */
     for (int host = 0; host < 2; host++) {
-        hello_request(host == 0 ? 0x1111u : 0x2222u);
+        host_handshake(host == 0 ? 0x1111u : 0x2222u, PB_HOST_ROLE_TAKE_OVER, "host");
         for (uint8_t seq = 1; seq <= 5; seq++) {
             pb_move_straight_t m = {seq, 0.01f, 0.1f};
             host_send(PB_PKT_MOVE_STRAIGHT, seq, &m, sizeof m);
@@ -160,7 +163,7 @@ static void two_hosts_in_turn_get_every_command_executed(void)
     /* A host without a session (0) clears the history too. */
     pb_move_straight_t m = {6, 0.01f, 0.1f};
     host_send(PB_PKT_MOVE_STRAIGHT, 9, &m, sizeof m);
-    hello_request(0);
+    host_handshake(0, PB_HOST_ROLE_TAKE_OVER, "anonymous");
     host_send(PB_PKT_MOVE_STRAIGHT, 9, &m, sizeof m);
     world_run_ms(2);
     CHECK(robot_state.locomotion.queue_length == 12, "queue %u", robot_state.locomotion.queue_length);

@@ -179,8 +179,9 @@ static void a_result_waits_until_the_wheels_stand_still_unless_the_next_movement
         if (host_count(PB_PKT_MOVEMENT_DONE) >= 2)
             second_at = t;
     }
-    /* The first is reported at the hand-over, with the robot still moving on into the second. */
-    CHECK(first_at > 0 && second_started > 0 && abs(first_at - second_started) <= 2,
+    /* The first is reported at the hand-over, with the robot still moving on into the second (a state packet being
+     * encoded at that moment delays the report by up to 4 ticks: comm_offer()). */
+    CHECK(first_at > 0 && second_started > 0 && abs(first_at - second_started) <= 6,
           "first reported at %d ms, the second started at %d ms", first_at, second_started);
     /* The last one waits for the wheels to stand still (the firmware sees it a speed timeout after the last
      * pulse), at most LOCOMOTION_SETTLE_MS after the end. */

@@ -21,7 +21,7 @@ const BATTERY = layout.robot_state.fields.power + layout.state_power.fields.batt
 
 const exportsWanted = ['memory', 'sim_init', 'sim_advance', 'sim_encoder_edge', 'sim_uart_rx', 'sim_uart_tx_take',
   'sim_uart_tx_buffer', 'sim_ir_rx', 'sim_outputs', 'sim_state', 'sim_settings', 'sim_eeprom', 'sim_events',
-  'sim_run_events', 'sim_inputs', 'sim_ir_out'];
+  'sim_run_events', 'sim_inputs', 'sim_ir_out', 'sim_links', 'sim_link_tx_take'];
 const exportsHave = WebAssembly.Module.exports(mod).map(e => e.name).sort();
 check(JSON.stringify(exportsHave) === JSON.stringify(exportsWanted.slice().sort()), 'exports ' + exportsHave);
 const importsHave = WebAssembly.Module.imports(mod).map(i => i.module + '.' + i.name);
@@ -59,23 +59,40 @@ check(state.getUint16(BATTERY, true) === 3700, 'battery in the state');
 check(ir.length >= 20 && ir.every(m => m[0] === 7), 'IR beacons from robot 7: ' + ir.length);
 const settings = new DataView(x.memory.buffer, x.sim_settings(), SETTINGS_SIZE);
 check(settings.getUint8(0) === 7, 'settings.identity.robot_id');
-// Teleoperation: wheel_speeds 0.1 / 0.1 m/s -> positive PWM on both motors.
-const frame = [0x24, 0, 8];
+// A frame (type, seq, payload bytes) with its CRC, SLIP-framed (no byte here needs escaping).
+function wire(type, seq, payload) {
+  const frame = [type, seq, payload.length, ...payload];
+  let crc = 0xffff;
+  for (const b of frame) { crc ^= b << 8; for (let i = 0; i < 8; i++) crc = (crc & 0x8000) ? ((crc << 1) ^ 0x1021) & 0xffff : (crc << 1) & 0xffff; }
+  return [0xc0, ...frame, crc & 0xff, crc >> 8, 0xc0];
+}
+const le = (n, size) => Array.from({ length: size }, (_, i) => Number((BigInt(n) >> BigInt(8 * i)) & 0xffn));
+const label = s => [...Buffer.from(s.padEnd(16, '\0'))];
 const p = new DataView(new ArrayBuffer(8)); p.setFloat32(0, 0.1, true); p.setFloat32(4, 0.1, true);
-frame.push(...new Uint8Array(p.buffer));
-let crc = 0xffff;
-for (const b of frame) { crc ^= b << 8; for (let i = 0; i < 8; i++) crc = (crc & 0x8000) ? ((crc << 1) ^ 0x1021) & 0xffff : (crc << 1) & 0xffff; }
-frame.push(crc & 0xff, crc >> 8);
-// Delivered as one batch of events (sim_run_events), a byte every 100 us, then on to 260 ms.
-const wire = [0xc0, ...frame, 0xc0];
-const events = new DataView(x.memory.buffer, x.sim_events(), 16 * wire.length);
-wire.forEach((b, i) => {
-  events.setBigInt64(16 * i, 250n * TICKS_PER_MS + BigInt(i + 1) * 3200n, true);
-  events.setInt32(16 * i + 8, 0, true); // SIM_EVENT_UART_RX
-  events.setInt32(16 * i + 12, b, true);
-});
-x.sim_run_events(wire.length, 260n * TICKS_PER_MS);
+// Events (sim_run_events) from 250 ms on, one every 100 us: kind 0 a UART byte, 2 a byte on a link, 3 a link opens.
+let at = 250n * TICKS_PER_MS;
+function deliver(list, until) {
+  const events = new DataView(x.memory.buffer, x.sim_events(), 16 * list.length);
+  list.forEach(([kind, arg], i) => {
+    at += 3200n;
+    events.setBigInt64(16 * i, at, true);
+    events.setInt32(16 * i + 8, kind, true);
+    events.setInt32(16 * i + 12, arg, true);
+  });
+  x.sim_run_events(list.length, until);
+}
+check(x.sim_links() >= 2, 'host links: ' + x.sim_links());
+// The host on the UART drives (hello_request, set_role), then teleoperation: positive PWM on both motors.
+const driver = [...wire(0x10, 1, [...le(3, 2), ...le(0x1234, 4)]), ...wire(0x17, 2, [1, ...label('smoke@js')]),
+  ...wire(0x24, 0, [...new Uint8Array(p.buffer)])];
+for (let i = 0; i < driver.length; i += 64) deliver(driver.slice(i, i + 64).map(b => [0, b]), -1n);
+x.sim_advance(at + 5n * TICKS_PER_MS);
 const out = new DataView(x.memory.buffer, x.sim_outputs(), 6);
 check(out.getInt16(0, true) > 0 && out.getInt16(2, true) > 0, 'motors driven: ' + out.getInt16(0, true));
+// A second host on link 1 watches: its wheel_speeds is refused (error not_driver on link 1).
+deliver([[3, 1], ...wire(0x24, 0, [0, 0, 0, 0, 0, 0, 0, 0]).map(b => [2, 1 << 8 | b])], at + 10n * TICKS_PER_MS);
+const reply = new Uint8Array(x.memory.buffer, x.sim_uart_tx_buffer(), x.sim_link_tx_take(1, 256));
+const error = [...reply].join(',').includes([0xc0, 0x05].join(','));
+check(error && out.getInt16(0, true) > 0, 'the watcher refused, the driver still drives: ' + [...reply]);
 console.log(failures ? `wasm contract: ${failures} failed` : 'wasm contract: exports and behaviour as in sim_abi.h');
 process.exit(failures ? 1 : 0);

@@ -35,7 +35,7 @@ static double stripe(int index)
     return (index & 1) ? mean * (2.0 - world.stripe_ratio) : mean * world.stripe_ratio;
 }
 
-void world_reset(int32_t robot_id)
+void world_power_on(int32_t robot_id)
 {
     memset(&world, 0, sizeof world);
     world.max_speed = 0.5;
@@ -58,9 +58,23 @@ void world_reset(int32_t robot_id)
     }
     host_clear();
     slip_decoder_init(&host_rx);
+    for (int k = 0; k < (int)COMM_LINKS; k++) {
+        link_clear(k);
+        slip_decoder_init(&link_hosts[k].rx);
+    }
     sim_host_eeprom_erase();
     sense();
     sim_init(robot_id);
+}
+
+void world_reset(int32_t robot_id)
+{
+    world_power_on(robot_id);
+    host_handshake(WORLD_SESSION, PB_HOST_ROLE_DRIVE, WORLD_LABEL);
+    world.now = (int64_t)(TICKS_PER_S / 1000); /* the robot stands still: one step of the clock does */
+    sim_advance(world.now);
+    while (sim_uart_tx_take(256) > 0) { /* what it said so far, unread */
+    }
 }
 
 double world_heading_deg(void)
@@ -112,12 +126,18 @@ static void step(double dt)
     advance(world.now);
 }
 
+static void take_link(int link, int32_t max);
+
 void world_run_ms(int ms)
 {
     for (int i = 0; i < ms; i++) {
         for (int k = 0; k < 10; k++)
             step(0.0001);
-        take(world.link_bytes_per_ms);
+        if (!(world.stuck_links & 1))
+            take(world.link_bytes_per_ms);
+        for (int link = 1; link < (int)COMM_LINKS; link++)
+            if (!(world.stuck_links & (1 << link)))
+                take_link(link, world.link_bytes_per_ms);
     }
 }
 
@@ -191,26 +211,28 @@ void host_send(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
     host_send_raw(slip, m);
 }
 
-static void take(int32_t max)
+/* Decodes what `link` sent (at most `max` bytes) into `frames`. */
+static void take_into(int link, int32_t max, slip_decoder_t *rx, host_frame_t *frames, int capacity, int *count,
+                      int *bad)
 {
     while (max > 0) {
-        int32_t n = sim_uart_tx_take(max);
+        int32_t n = sim_link_tx_take(link, max);
         if (n <= 0)
             break;
         const uint8_t *b = sim_host_tx_buffer();
         for (int32_t i = 0; i < n; i++) {
-            slip_result_t r = slip_decode(&host_rx, b[i]);
+            slip_result_t r = slip_decode(rx, b[i]);
             if (r == SLIP_ERROR)
-                host_bad_frames++;
+                (*bad)++;
             if (r != SLIP_FRAME)
                 continue;
             pb_frame_t f;
-            if (pb_frame_check(host_rx.buf, host_rx.len, &f) != PB_ERROR_CODE_NONE) {
-                host_bad_frames++;
+            if (pb_frame_check(rx->buf, rx->len, &f) != PB_ERROR_CODE_NONE) {
+                (*bad)++;
                 continue;
             }
-            if (host_frame_count < WORLD_MAX_FRAMES) {
-                host_frame_t *h = &host_frames[host_frame_count++];
+            if (*count < capacity) {
+                host_frame_t *h = &frames[(*count)++];
                 h->type = f.type;
                 h->seq = f.seq;
                 h->len = f.len;
@@ -219,6 +241,17 @@ static void take(int32_t max)
         }
         max -= n;
     }
+}
+
+static void take(int32_t max)
+{
+    take_into(0, max, &host_rx, host_frames, WORLD_MAX_FRAMES, &host_frame_count, &host_bad_frames);
+}
+
+static void take_link(int link, int32_t max)
+{
+    link_host_t *h = &link_hosts[link];
+    take_into(link, max, &h->rx, h->frames, WORLD_LINK_FRAMES, &h->count, &h->bad);
 }
 
 void host_collect(void)
@@ -245,5 +278,111 @@ int host_count(uint8_t type)
     int c = 0;
     for (int i = 0; i < host_frame_count; i++)
         c += host_frames[i].type == type;
+    return c;
+}
+
+static void role_request(uint8_t role, const char *label, pb_set_role_t *r)
+{
+    memset(r, 0, sizeof *r);
+    r->role = role;
+    strncpy(r->label, label, sizeof r->label);
+}
+
+/* Sequence numbers of the handshakes: each set_role a new command, never taken for a retransmission. */
+static uint8_t handshake_seq = 200;
+
+static uint8_t next_seq(void)
+{
+    handshake_seq = (uint8_t)(handshake_seq == 255 ? 200 : handshake_seq + 1);
+    return handshake_seq;
+}
+
+void host_handshake(uint32_t session, uint8_t role, const char *label)
+{
+    pb_hello_request_t h = {PB_PROTOCOL_VERSION, session};
+    pb_set_role_t r;
+    role_request(role, label, &r);
+    host_send(PB_PKT_HELLO_REQUEST, next_seq(), &h, sizeof h);
+    host_send(PB_PKT_SET_ROLE, next_seq(), &r, sizeof r);
+}
+
+/* ---- more hosts ---- */
+
+link_host_t link_hosts[COMM_LINKS];
+
+static void link_event(int kind, int32_t arg)
+{
+    sim_event_t *e = sim_host_events();
+    e->ticks = world.now;
+    e->kind = kind;
+    e->arg = arg;
+    sim_run_events(1, -1);
+}
+
+void link_open(int link)
+{
+    link_event(SIM_EVENT_LINK_OPEN, link);
+}
+
+void link_close(int link)
+{
+    link_event(SIM_EVENT_LINK_CLOSE, link);
+}
+
+void link_send_raw(int link, const uint8_t *bytes, uint16_t n)
+{
+    sim_event_t *e = sim_host_events();
+    while (n > 0) {
+        int32_t count = 0;
+        for (; count < SIM_EVENT_CAPACITY && n > 0; count++, n--) {
+            e[count].ticks = world.now;
+            e[count].kind = SIM_EVENT_LINK_RX;
+            e[count].arg = link << 8 | *bytes++;
+        }
+        sim_run_events(count, -1);
+    }
+}
+
+void link_send(int link, uint8_t type, uint8_t seq, const void *payload, uint8_t len)
+{
+    uint8_t frame[PB_MAX_FRAME + 8];
+    uint8_t slip[2 * sizeof frame + 2];
+    uint16_t n = pb_frame_encode(frame, type, seq, payload, len);
+    link_send_raw(link, slip, slip_encode(slip, frame, n));
+}
+
+void link_handshake(int link, uint32_t session, uint8_t role, const char *label)
+{
+    pb_hello_request_t h = {PB_PROTOCOL_VERSION, session};
+    pb_set_role_t r;
+    role_request(role, label, &r);
+    link_send(link, PB_PKT_HELLO_REQUEST, next_seq(), &h, sizeof h);
+    link_send(link, PB_PKT_SET_ROLE, next_seq(), &r, sizeof r);
+}
+
+void link_collect(int link)
+{
+    take_link(link, 1 << 20);
+}
+
+void link_clear(int link)
+{
+    link_hosts[link].count = 0;
+    link_hosts[link].bad = 0;
+}
+
+const host_frame_t *link_find(int link, uint8_t type, int n)
+{
+    for (int i = 0; i < link_hosts[link].count; i++)
+        if (link_hosts[link].frames[i].type == type && n-- == 0)
+            return &link_hosts[link].frames[i];
+    return NULL;
+}
+
+int link_count(int link, uint8_t type)
+{
+    int c = 0;
+    for (int i = 0; i < link_hosts[link].count; i++)
+        c += link_hosts[link].frames[i].type == type;
     return c;
 }

@@ -11,7 +11,9 @@
 #include <stdint.h>
 
 #include "hal/sim/sim_abi.h"
+#include "modules/comm.h"
 #include "pb_protocol.h"
+#include "protocol/slip.h"
 
 #define WORLD_MAX_IR 64
 #define WORLD_MAX_FRAMES 512
@@ -41,6 +43,7 @@ typedef struct {
     int emitter_masks_seen; /* bit m set when the line sensor's emitters in mask m (m < 32) were seen lit */
     int64_t now;
     int link_bytes_per_ms; /* how fast the host drains the link */
+    int stuck_links;       /* bit k: the host of link k reads nothing (world_run_ms leaves its bytes waiting) */
 } world_t;
 
 extern world_t world;
@@ -50,12 +53,21 @@ const sim_outputs_t *sim_host_outputs(void);
 const uint8_t *sim_host_tx_buffer(void);
 sim_inputs_t *sim_host_inputs(void);
 sim_ir_out_t *sim_host_ir_out(void);
+sim_event_t *sim_host_events(void);
 void sim_host_eeprom_erase(void);
 /* The next main loop tick lasts `us` longer than its code (which takes no simulated time). */
 void sim_host_stretch_tick_us(uint32_t us);
 
-/** Resets the world (robot at the origin facing +x, standing still, EEPROM erased) and starts the firmware. */
+/** The session and label of the test's host, which drives the robot after world_reset(). */
+#define WORLD_SESSION 0x7E570001u
+#define WORLD_LABEL "test@host"
+
+/** Resets the world (robot at the origin facing +x, standing still, EEPROM erased), starts the firmware and lets
+ *  the test's host (link 0) take the drive (hello_request, set_role: 1 ms); what the robot said so far is collected
+ *  and cleared. */
 void world_reset(int32_t robot_id);
+/** As world_reset(), without any host: the robot as it comes out of reset. */
+void world_power_on(int32_t robot_id);
 /** Runs physics and firmware for `ms` milliseconds (0.1 ms physics steps, exact encoder edge times). */
 void world_run_ms(int ms);
 /** Heading change in degrees since reset. */
@@ -82,5 +94,29 @@ void host_clear(void);
 const host_frame_t *host_find(uint8_t type, int n);
 /** \return how many collected frames have `type`. */
 int host_count(uint8_t type);
+/** A host's handshake on link 0: hello_request with `session`, then set_role (PB_HOST_ROLE_*) under `label`. */
+void host_handshake(uint32_t session, uint8_t role, const char *label);
+
+/* ---- more hosts: the emulator's further links (1 .. COMM_LINKS-1), collected apart from link 0's ---- */
+#define WORLD_LINK_FRAMES 128
+typedef struct {
+    host_frame_t frames[WORLD_LINK_FRAMES];
+    int count;
+    int bad;
+    slip_decoder_t rx;
+} link_host_t;
+extern link_host_t link_hosts[COMM_LINKS];
+
+void link_open(int link);
+void link_close(int link);
+void link_send(int link, uint8_t type, uint8_t seq, const void *payload, uint8_t len);
+void link_send_raw(int link, const uint8_t *bytes, uint16_t n);
+/** hello_request and set_role on `link`. */
+void link_handshake(int link, uint32_t session, uint8_t role, const char *label);
+/** Collects what the robot sent on `link` (also done by world_run_ms at the link rate). */
+void link_collect(int link);
+void link_clear(int link);
+const host_frame_t *link_find(int link, uint8_t type, int n);
+int link_count(int link, uint8_t type);
 
 #endif

@@ -79,8 +79,9 @@ def header(model):
             o.append(f"#define PB_{p.name.upper()}_SIZE {p.size}")
         o.append("")
     o += ["/* Tables (pb_protocol_tables.c) */",
-          "/** A packet type: payload size bounds, direction, acknowledged, idempotent (a read: answered every time). */",
-          "typedef struct { uint8_t type; uint8_t min_size; uint8_t max_size; uint8_t dir; uint8_t needs_ack; uint8_t idempotent; } pb_packet_info_t;",
+          "/** A packet type: payload size bounds, direction, acknowledged, idempotent (a read: answered every time),",
+          " *  watcher_ok (obeyed from a host that only watches). */",
+          "typedef struct { uint8_t type; uint8_t min_size; uint8_t max_size; uint8_t dir; uint8_t needs_ack; uint8_t idempotent; uint8_t watcher_ok; } pb_packet_info_t;",
           "#define PB_DIR_R2H 0", "#define PB_DIR_H2R 1",
           f"#define PB_PACKET_INFO_COUNT {len(model.packets)}",
           "extern const PB_FLASH pb_packet_info_t pb_packet_info[PB_PACKET_INFO_COUNT];", "",
@@ -130,7 +131,7 @@ def tables(model):
          "const PB_FLASH pb_packet_info_t pb_packet_info[PB_PACKET_INFO_COUNT] = {"]
     for p in model.packets:
         o.append(f"    {{PB_PKT_{p.name.upper()}, {p.min_size}, {p.max_size}, "
-                 f"PB_DIR_{p.dir.upper()}, {1 if p.ack else 0}, {1 if p.idempotent else 0}}},")
+                 f"PB_DIR_{p.dir.upper()}, {1 if p.ack else 0}, {1 if p.idempotent else 0}, {1 if p.watcher_ok else 0}}},")
     o += ["};", "", "const PB_FLASH pb_settings_field_t pb_settings_fields[PB_SETTINGS_FIELD_COUNT] = {"]
     for path, f, off, _ in model.settings_leaves():
         t = "PB_FIELD_CHAR" if f.is_char else type_code[f.base]

@@ -67,12 +67,13 @@ def frame_table(model):
 
 
 def packet_table(model):
-    o = ["| type | name | direction | payload bytes | acked | meaning |", "|---|---|---|---|---|---|"]
+    o = ["| type | name | direction | payload bytes | acked | from watchers | meaning |", "|---|---|---|---|---|---|---|"]
     for p in model.packets:
         size = f"{p.min_size}..{p.max_size}" if p.variable else str(p.size)
         d = "robot to host" if p.dir == "r2h" else "host to robot"
         acked = ("yes, idempotent" if p.idempotent else "yes") if p.ack else ""
-        o.append(f"| 0x{p.id:02X} | `{p.name}` | {d} | {size} | {acked} | {p.doc} |")
+        watchers = "" if p.dir == "r2h" else "yes" if p.watcher_ok else "refused"
+        o.append(f"| 0x{p.id:02X} | `{p.name}` | {d} | {size} | {acked} | {watchers} | {p.doc} |")
     return "\n".join(o)
 
 

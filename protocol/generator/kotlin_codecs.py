@@ -292,12 +292,14 @@ def codecs(model):
           "    public val fromRobot: Boolean, public val acked: Boolean,",
           "    /** A read: the robot answers it every time and never takes it for a retransmission. */",
           "    public val idempotent: Boolean,",
+          "    /** Obeyed from a host that only watches the robot (reads, heartbeats, the role, goodbye, stop). */",
+          "    public val watcherOk: Boolean,",
           ")", "",
           "/** Every packet type of the protocol. */",
           "public val PACKET_SPECS: Map<Int, PacketSpec> = listOf("]
     for p in model.packets:
         o.append(f"    PacketSpec({p.id}, \"{p.name}\", {p.min_size}, {p.max_size}, {str(p.dir == 'r2h').lower()}, "
-                 f"{str(p.ack).lower()}, {str(p.idempotent).lower()}),")
+                 f"{str(p.ack).lower()}, {str(p.idempotent).lower()}, {str(p.watcher_ok).lower()}),")
     o += [").associateBy { it.type }", "",
           "/** [PACKET_SPECS] indexed by type (0..255): one array load per frame. */",
           "internal val PACKET_SPEC_BY_TYPE: Array<PacketSpec?> = arrayOfNulls<PacketSpec>(256).also { a -> PACKET_SPECS.values.forEach { a[it.type] = it } }", "",

@@ -122,7 +122,9 @@ class Model:
             s = Struct(name, p.get("doc", ""), p["fields"], self, f"pb_{name}_t", camel(name, True))
             s.id, s.dir, s.ack = p["id"], p["dir"], p.get("ack", False)
             s.idempotent = p.get("idempotent", False)
+            s.watcher_ok = p.get("watcher_ok", False)
             assert not s.idempotent or (s.ack and s.dir == "h2r"), f"{name}: only acked commands can be idempotent"
+            assert not s.watcher_ok or s.dir == "h2r", f"{name}: only host packets can be watcher_ok"
             assert s.max_size <= self.max_payload, f"{name} exceeds max_payload"
             self.packets.append(s)
         ids = [p.id for p in self.packets]
@@ -149,7 +151,8 @@ class Model:
         `flags <name> <bit>=<mask> ...` (schema order); per struct (shared structs, settings and state groups,
         robot_state, settings, then every packet's payload) `struct <name> <size>` followed by one line per
         field ` <name> <type> <offset> <size> <min> <max>` (min/max: the settings range, the tail's length
-        bounds for `bytes`, None when there is none); per packet `packet <name> <id> <dir> <acked> <idempotent>`.
+        bounds for `bytes`, None when there is none); per packet
+        `packet <name> <id> <dir> <acked> <idempotent> <watcher_ok>`.
         """
         lines = [f"protocol {self.version}"]
         for name, e in self.enums.items():
@@ -164,7 +167,7 @@ class Model:
         for s in [*self.structs.values(), self.settings, *self.packets]:
             walk(s)
         for p in self.packets:
-            lines.append(f"packet {p.name} {p.id} {p.dir} {p.ack} {p.idempotent}")
+            lines.append(f"packet {p.name} {p.id} {p.dir} {p.ack} {p.idempotent} {p.watcher_ok}")
         return "\n".join(lines) + "\n"
 
     def settings_leaves(self):

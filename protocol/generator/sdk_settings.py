@@ -15,11 +15,13 @@ def _kdoc(text, indent=""):
     return f"{indent}/** {text} */"
 
 
-def _describe(f):
+def _describe(f, enums):
     doc = f.get("doc", "")
     doc = doc[:1].upper() + doc[1:] if doc else ""
     bits = []
-    if "min" in f and "max" in f:
+    if f.get("enum"):
+        bits.append("one of " + ", ".join(enums[f["enum"]]["values"]))
+    elif "min" in f and "max" in f:
         bits.append(f"{f['min']}..{f['max']}")
     if f.get("unit"):
         bits.append(f["unit"])
@@ -61,7 +63,7 @@ def emit(model):
                          f"public class {cls} internal constructor(s: SettingsBase, group: String) {{"]
                 for f in fields:
                     name, typ, make, _ = _leaf("$group", f, enums)
-                    lines.append(_kdoc(_describe(f).replace("{path}", f"<group>.{f['name']}"), "    "))
+                    lines.append(_kdoc(_describe(f, enums).replace("{path}", f"<group>.{f['name']}"), "    "))
                     lines.append(f"    public val {name}: {typ} = s.{make}")
                     lines.append("")
                 lines[-1] = "}"
@@ -74,7 +76,7 @@ def emit(model):
                 name, typ, make, path = _leaf(gname, f, enums)
                 if f.get("enum"):
                     used_enums.add(camel(f["enum"], True))
-                lines.append(_kdoc(_describe(f).replace("{path}", path), "    "))
+                lines.append(_kdoc(_describe(f, enums).replace("{path}", path), "    "))
                 lines.append(f"    public val {name}: {typ} = s.{make}")
                 lines.append("")
             lines[-1] = "}"

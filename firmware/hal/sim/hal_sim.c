@@ -11,6 +11,10 @@
  *
  * The EEPROM is a plain array in linear memory (sim_eeprom()), erased (0xFF) in a fresh instance and kept by
  * sim_init: the emulator power-cycles a robot by copying it into a fresh instance before sim_init.
+ *
+ * Host links: link 0 is the UART; the emulator's further hosts get links 1 .. COMM_LINKS-1, serial links of their
+ * own (a receive and a transmit ring each, as the UART has). The board wires them into comm as they open and
+ * close, as the Bluetooth stack does with its channels.
  */
 #include <stddef.h>
 #include <string.h>
@@ -19,6 +23,7 @@
 #include "core/data.h"
 #include "hal/hal.h"
 #include "hal/sim/sim_abi.h"
+#include "modules/comm.h"
 
 #define TICKS_PER_US 32
 #define TICKS_PER_CAPTURE 8
@@ -315,6 +320,68 @@ void sim_uart_rx(int32_t byte)
         uart_rx_isr((uint8_t)byte);
 }
 
+/* ---- the emulator's host links beyond the UART ---- */
+
+/* One-byte indices wrap by themselves: 255 bytes fit each way. */
+static struct {
+    uint8_t rx[256], tx[256];
+    uint8_t rx_head, rx_tail, tx_head, tx_tail;
+} sim_link[COMM_LINKS];
+
+static uint16_t sim_link_room(uint8_t link)
+{
+    return (uint8_t)(sim_link[link].tx_tail - sim_link[link].tx_head - 1u);
+}
+
+static void sim_link_write(uint8_t link, const uint8_t *p, uint16_t n)
+{
+    uint8_t head = sim_link[link].tx_head;
+    while (n--)
+        sim_link[link].tx[head++] = *p++;
+    sim_link[link].tx_head = head;
+}
+
+static uint8_t sim_link_take(uint8_t link, uint8_t *p, uint8_t max)
+{
+    uint8_t n = 0;
+    while (n < max && sim_link[link].rx_tail != sim_link[link].rx_head)
+        p[n++] = sim_link[link].rx[sim_link[link].rx_tail++];
+    return n;
+}
+
+static const comm_link_driver_t sim_link_driver = {false, sim_link_room, sim_link_write, sim_link_take};
+
+/* The receive interrupt of a link; a full ring loses the byte (the emulator delivers at the baud rate, and the
+ * main loop empties the ring every tick, so it never fills). */
+static void sim_link_rx(int32_t link, uint8_t byte)
+{
+    if (link == 0) {
+        sim_uart_rx(byte);
+    } else if (link > 0 && link < (int32_t)COMM_LINKS && irq_enabled) {
+        uint8_t next = (uint8_t)(sim_link[link].rx_head + 1u);
+        if (next != sim_link[link].rx_tail) {
+            sim_link[link].rx[sim_link[link].rx_head] = byte;
+            sim_link[link].rx_head = next;
+        }
+    }
+}
+
+static void sim_link_open(int32_t link, bool open)
+{
+    if (link < 0 || link >= (int32_t)COMM_LINKS || !irq_enabled)
+        return;
+    sim_link[link].rx_head = sim_link[link].rx_tail = sim_link[link].tx_head = sim_link[link].tx_tail = 0;
+    if (open)
+        comm_link_open((uint8_t)link, link == 0 ? &comm_uart_link : &sim_link_driver);
+    else
+        comm_link_close((uint8_t)link, COMM_LINK_CLOSED);
+}
+
+int32_t sim_links(void)
+{
+    return COMM_LINKS;
+}
+
 static sim_event_t events[SIM_EVENT_CAPACITY];
 
 int32_t sim_events(void)
@@ -333,6 +400,10 @@ void sim_run_events(int32_t count, int64_t end_ticks)
             sim_uart_rx(e->arg);
         else if (e->kind == SIM_EVENT_ENCODER_EDGE)
             sim_encoder_edge(e->arg, e->ticks);
+        else if (e->kind == SIM_EVENT_LINK_RX)
+            sim_link_rx(e->arg >> 8, (uint8_t)e->arg);
+        else if (e->kind == SIM_EVENT_LINK_OPEN || e->kind == SIM_EVENT_LINK_CLOSE)
+            sim_link_open(e->arg, e->kind == SIM_EVENT_LINK_OPEN);
     }
     if (end_ticks >= 0)
         sim_advance(end_ticks);
@@ -349,6 +420,20 @@ int32_t sim_uart_tx_take(int32_t max)
             break;
         tx_out[n++] = (uint8_t)b;
     }
+    return n;
+}
+
+int32_t sim_link_tx_take(int32_t link, int32_t max)
+{
+    if (link == 0)
+        return sim_uart_tx_take(max);
+    if (link < 0 || link >= (int32_t)COMM_LINKS)
+        return 0;
+    if (max > (int32_t)sizeof tx_out)
+        max = (int32_t)sizeof tx_out;
+    int32_t n = 0;
+    while (n < max && sim_link[link].tx_tail != sim_link[link].tx_head)
+        tx_out[n++] = sim_link[link].tx[sim_link[link].tx_tail++];
     return n;
 }
 
@@ -417,6 +502,11 @@ sim_inputs_t *sim_host_inputs(void)
 sim_ir_out_t *sim_host_ir_out(void)
 {
     return &ir_out;
+}
+
+sim_event_t *sim_host_events(void)
+{
+    return events;
 }
 
 void sim_host_eeprom_erase(void)

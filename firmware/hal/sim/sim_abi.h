@@ -35,12 +35,18 @@ SIM_EXPORT(sim_uart_rx) void sim_uart_rx(int32_t byte);
 /** An event the emulator hands over in a batch (sim_run_events), in time order. */
 typedef struct __attribute__((packed)) {
     int64_t ticks; /**< when it happens */
-    int32_t kind;  /**< SIM_EVENT_UART_RX or SIM_EVENT_ENCODER_EDGE */
-    int32_t arg;   /**< the byte received, or the wheel (0 left, 1 right) */
+    int32_t kind;  /**< SIM_EVENT_* */
+    int32_t arg;   /**< the byte received, the wheel (0 left, 1 right), or as the kind says */
 } sim_event_t;
 
 #define SIM_EVENT_UART_RX 0
 #define SIM_EVENT_ENCODER_EDGE 1
+/* Host links (sim_links()): link 0 is the UART, the others further host links of the emulator. Each host the
+ * emulator attaches to a robot gets a link of its own: it opens it, sends its bytes on it, and closes it when the
+ * host leaves (after the host's last bytes). A fresh instance (a power cycle) starts with link 0 open only. */
+#define SIM_EVENT_LINK_RX 2    /**< arg: link << 8 | byte (link 0: the UART, as SIM_EVENT_UART_RX) */
+#define SIM_EVENT_LINK_OPEN 3  /**< arg: link: a host connected on it */
+#define SIM_EVENT_LINK_CLOSE 4 /**< arg: link: its host left */
 #define SIM_EVENT_CAPACITY 64
 
 /** Address of the event buffer (SIM_EVENT_CAPACITY sim_event_t) that sim_run_events reads. */
@@ -56,6 +62,12 @@ SIM_EXPORT(sim_run_events) void sim_run_events(int32_t count, int64_t end_ticks)
  *  sim_uart_tx_buffer(); returns how many. The emulator calls it at the link's baud rate. */
 SIM_EXPORT(sim_uart_tx_take) int32_t sim_uart_tx_take(int32_t max);
 SIM_EXPORT(sim_uart_tx_buffer) int32_t sim_uart_tx_buffer(void);
+
+/** How many host links the firmware serves at once (link 0 is the UART). */
+SIM_EXPORT(sim_links) int32_t sim_links(void);
+
+/** As sim_uart_tx_take, for host link `link` (0: the UART). */
+SIM_EXPORT(sim_link_tx_take) int32_t sim_link_tx_take(int32_t link, int32_t max);
 
 /** An IR message heard by receiver `side` (0 front, 1 rear). A robot hearing its own id sees an
  *  obstacle (its reflection). `len` payload bytes (0..8) are packed little-endian in lo, hi. */

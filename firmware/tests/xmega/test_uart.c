@@ -35,10 +35,20 @@ static bool acked(uint8_t seq)
     return false;
 }
 
+/* The host asks to drive (set_role): only the driving host may change the robot (set_sync among it). */
+static void drive(void)
+{
+    uint8_t bytes[2 * PB_MAX_FRAME + 2];
+    pb_set_role_t role = {.role = PB_HOST_ROLE_DRIVE, .label = "test@xmega"};
+    uint16_t n = packet(bytes, PB_PKT_SET_ROLE, 100, &role, sizeof role);
+    robot_run_until(xm_usart_send(XM_USARTC0, bytes, n, BAUD, xm_now()) + XM_MS(20));
+}
+
 static void packets_go_both_ways_at_the_baud_rate(void)
 {
     robot_boot();
     robot_run_us(20000);
+    drive();
     CHECK(acked(1), "set_sync acked");
     robot_run_us(300000); /* full states every 100 ms */
     double bit = xm_usart_bit_cycles(XM_USARTC0);
@@ -58,6 +68,7 @@ static void overruns_and_frame_errors_are_counted_and_survived(void)
     robot_boot();
     settings.link.failsafe_timeout_ms = 0;
     robot_run_us(20000);
+    drive();
     uint16_t lost = robot_state.errors.rx_overflow;
     /* 30 bytes arrive while interrupts stay masked for 1 ms: the receiver holds three, the rest overrun. */
     uint8_t noise[30];

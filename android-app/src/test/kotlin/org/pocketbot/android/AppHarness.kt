@@ -4,7 +4,10 @@ import android.Manifest
 import android.app.Application
 import android.graphics.Bitmap
 import android.graphics.Canvas
+import android.os.Build
 import android.os.Looper
+import android.view.InputDevice
+import android.view.KeyCharacterMap
 import android.view.KeyEvent
 import android.view.MotionEvent
 import android.view.View
@@ -69,14 +72,32 @@ class AppHarness(
 
     init {
         shadowOf(app).grantPermissions(Manifest.permission.BLUETOOTH_SCAN, Manifest.permission.BLUETOOTH_CONNECT)
+        if (Build.VERSION.SDK_INT >= Build.VERSION_CODES.TIRAMISU) {
+            app.applicationInfo.setEnableOnBackInvokedCallback(manifestOptsInToBackCallback())
+        }
         app.bluetoothAccess = BluetoothAccess(app)
         model = AppModel(scope + crashes, app.bluetoothAccess, sources) { host, port -> EmulatorDiscoverer(host, port) }
         app.model = model
         app.connectionService = ConnectionService.Keeper(app, model) // as PocketBotApp does
     }
 
+    /**
+     * Whether the app's manifest opts in to OnBackInvokedCallback (`android:enableOnBackInvokedCallback`), as Android's
+     * package manager reads it on 13 and later. Robolectric's manifest parser (Android's older PackageParser) skips
+     * that attribute, so the harness reads it from the manifest the app is built from.
+     */
+    private fun manifestOptsInToBackCallback(): Boolean {
+        val config = java.util.Properties()
+        AppHarness::class.java.getResourceAsStream("/com/android/tools/test_config.properties")!!.use { config.load(it) }
+        val manifest = javax.xml.parsers.DocumentBuilderFactory.newInstance().apply { isNamespaceAware = true }
+            .newDocumentBuilder().parse(File(config.getProperty("android_merged_manifest")))
+        val application = manifest.getElementsByTagName("application").item(0) as org.w3c.dom.Element
+        return application.getAttributeNS("http://schemas.android.com/apk/res/android", "enableOnBackInvokedCallback") == "true"
+    }
+
     suspend fun launch(): MainActivity {
-        controller = Robolectric.buildActivity(MainActivity::class.java).setup()
+        // The window manager gives the resumed Activity's window the input focus (keys such as Back go to it).
+        controller = Robolectric.buildActivity(MainActivity::class.java).setup().windowFocusChanged(true)
         activity = controller.get()
         run(20.milliseconds)
         return activity
@@ -84,27 +105,27 @@ class AppHarness(
 
     /** The phone turned: the Activity is destroyed and made again, the process stays. */
     suspend fun rotate() {
-        controller.recreate()
+        controller.recreate().windowFocusChanged(true)
         activity = controller.get()
         run(20.milliseconds)
     }
 
     /**
-     * The user presses Back, delivered as Android delivers it. Android 13 and later (the app opts in to
-     * OnBackInvokedCallback) hand it to the window's top callback, as ViewRootImpl does for the Back key: the app's
-     * while it registered one, else the system's (on Android 12+ it moves the app to the background). Before, the key
-     * goes through the window to the Activity (onKeyUp, onBackPressed).
+     * The user presses Back: the key goes into the window's input queue (its ViewRootImpl) as Android's input dispatcher
+     * sends it, and the platform's own code decides where it goes. Android 13 and later (the app opts in to
+     * OnBackInvokedCallback) take it out of the queue before any view sees it and hand it to the window's top callback:
+     * the app's while it registered one, else the system's (on Android 12 and later, the app moves to the background).
+     * Before 13 it goes through the views to the Activity: onKeyDown, onKeyUp, onBackPressed.
      */
     suspend fun pressBack() {
-        val dispatcher = if (android.os.Build.VERSION.SDK_INT >= 33) root.viewRootImpl?.onBackInvokedDispatcher else null
-        if (dispatcher != null && dispatcher.isOnBackInvokedCallbackEnabled) {
-            val top = dispatcher.topCallback ?: throw AssertionError("no back callback at all")
-            top.onBackInvoked()
-        } else {
-            for (action in listOf(KeyEvent.ACTION_DOWN, KeyEvent.ACTION_UP)) {
-                val now = android.os.SystemClock.uptimeMillis()
-                root.dispatchKeyEvent(KeyEvent(now, now, action, KeyEvent.KEYCODE_BACK, 0))
-            }
+        val window = root.viewRootImpl ?: throw AssertionError("the Activity's window is not on screen")
+        val down = android.os.SystemClock.uptimeMillis()
+        for (action in listOf(KeyEvent.ACTION_DOWN, KeyEvent.ACTION_UP)) {
+            val now = android.os.SystemClock.uptimeMillis()
+            window.dispatchInputEvent(
+                KeyEvent(down, now, action, KeyEvent.KEYCODE_BACK, 0, 0, KeyCharacterMap.VIRTUAL_KEYBOARD, 0, 0, InputDevice.SOURCE_KEYBOARD),
+            )
+            idle()
         }
         run(20.milliseconds)
     }

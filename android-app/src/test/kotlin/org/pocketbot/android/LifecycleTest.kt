@@ -57,7 +57,7 @@ class BackgroundStartRule : ShadowContextImpl() {
  * apps stop the robot (ground truth); the screen stays on while the robot drives.
  */
 @RunWith(org.robolectric.RobolectricTestRunner::class)
-@Config(sdk = [35], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi", shadows = [BackgroundStartRule::class])
+@Config(sdk = [35], application = TestApp::class, qualifiers = "w360dp-h760dp-xhdpi", shadows = [BackgroundStartRule::class, PlatformBluetoothDevice::class])
 class LifecycleTest {
     @After
     fun foreground() {
@@ -129,7 +129,9 @@ class LifecycleTest {
         assertEquals("PocketBot-1", shadowOf(app).nextStartedService?.getStringExtra("robot"), "started now")
     }
 
+    /** Android 12 shows the notification without asking; 13 and later only if the user allows it. */
     @Test
+    @Config(sdk = [31, 35])
     fun theNotificationIsAskedForOnAndroid13AndItsStopButtonStopsTheRobot() = withApp {
         connectRobot()
         val asked = shadowOf(activity).lastRequestedPermission
@@ -182,9 +184,11 @@ class LifecycleTest {
 
     /**
      * Android 12 and later move a launcher activity to the background on Back instead of finishing it: Back must stop
-     * the robot itself. Pressed as Android 13+ delivers it, to the window's top OnBackInvokedCallback.
+     * the robot itself. Pressed as a key into the window: Android 12 hands it to the Activity (onBackPressed), 13 and
+     * later to the window's top OnBackInvokedCallback.
      */
     @Test
+    @Config(sdk = [31, 35])
     fun backWithARobotDrivingStopsItAndAsksToLeave() = withApp {
         connectRobot()
         val session = model.session.value!!

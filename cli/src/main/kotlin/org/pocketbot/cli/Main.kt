@@ -15,16 +15,23 @@ import com.github.ajalt.clikt.parameters.options.switch
 import com.github.ajalt.clikt.parameters.types.double
 import com.github.ajalt.clikt.parameters.types.int
 import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Job
 import kotlinx.coroutines.TimeoutCancellationException
 import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import org.pocketbot.emulator.cli.EmulatorCommand
 import org.pocketbot.sdk.CommandRefusedException
 import org.pocketbot.sdk.CommandTimeoutException
 import org.pocketbot.sdk.ConnectFailedException
+import org.pocketbot.sdk.HostLabel
+import org.pocketbot.sdk.NotDriverException
+import org.pocketbot.sdk.QueueOnLeave
+import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.ProtocolMismatchException
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.transport.EmulatorDiscoverer
 import org.pocketbot.sdk.transport.TransportLostException
@@ -41,10 +48,12 @@ object Exit {
     const val LINK_LOST = 5
     const val VERSION_MISMATCH = 6
     const val TIMEOUT = 7
+    const val DRIVEN_ELSEWHERE = 8
 
     /** The exit code for [e], the way a script can act on it. */
     fun of(e: Throwable): Int = when (e) {
         is NoSuchRobotException -> NO_SUCH_ROBOT
+        is NotDriverException, is DrivenElsewhereException -> DRIVEN_ELSEWHERE
         is CommandRefusedException -> REFUSED
         is ProtocolMismatchException -> VERSION_MISMATCH
         is CommandTimeoutException, is TimeoutCancellationException -> TIMEOUT
@@ -58,8 +67,11 @@ object Exit {
 
 /** What every command shares: where to look for robots, and how to print. */
 class Globals(val format: Format, val sources: Sources) {
-    val options = RobotOptions()
+    val options = RobotOptions(hostLabel = HostLabel.of("cli"))
 }
+
+/** Another host drives the robot and the command would change it: exit code 8. */
+class DrivenElsewhereException(message: String) : Exception(message)
 
 /** `--json` / `--csv`, accepted before the command (for every command) and after it: the format, or null for the default. */
 fun CoreCliktCommand.formatOptions() = option(help = "output format: --json (one object per line) or --csv").switch("--json" to Format.JSON, "--csv" to Format.CSV)
@@ -71,7 +83,9 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
         serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found.
 
         Exit codes: 0 ok, 1 other failure, 2 usage (also an unknown setting or field), 3 no such robot,
-        4 refused by the robot, 5 link lost, 6 firmware version mismatch, 7 timeout.
+        4 refused by the robot, 5 link lost (also a link that stays down for ${LINK_GRACE.inWholeSeconds} s: no command waits longer
+        for it), 6 firmware version mismatch, 7 timeout, 8 driven by another host (commands that change a robot need
+        --take-over then; the others only watch it).
 
         Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
     """.trimIndent()
@@ -109,20 +123,35 @@ fun run(args: Array<String>): Int {
     }
 }
 
+/** What happened to a robot while a command ran, on stderr: a script's output stays clean. */
+private fun tell(robot: Robot, event: RobotEvent) = when (event) {
+    is RobotEvent.Restarted ->
+        System.err.println("pocketbot: ${robot.identity.name} restarted: its clock went back from ${event.lastSeenTimeMs / 1000.0} s to ${event.timeMs / 1000.0} s")
+    is RobotEvent.DriverChanged ->
+        if (event.taken) System.err.println("pocketbot: ${robot.identity.name} was taken over by ${event.driving.driver}") else Unit
+}
+
 fun main(args: Array<String>) {
     exitProcess(run(args))
 }
 
 /**
- * Runs [block] with the robots a command names connected, and disconnects them afterwards. Failures become a clear
- * line on stderr and the documented exit code.
+ * Runs [block] with the robots a command names connected as [role], and says goodbye to them afterwards (the robot
+ * does with what this command queued as [onLeave] says). With [mustDrive], a robot that another host drives fails
+ * the command before anything is sent to any robot. Failures become a clear line on stderr and the documented exit
+ * code. A robot whose link stays down for [LINK_GRACE] (or closes) ends the command with exit 5: the SDK would wait
+ * for the link without end, and a command must end.
  */
-fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Boolean, block: suspend CoroutineScope.(List<Robot>, Output) -> Unit) {
+fun robotCommand(
+    globals: Globals, format: Format?, names: List<String>, all: Boolean, role: Role, mustDrive: Boolean, onLeave: QueueOnLeave,
+    block: suspend CoroutineScope.(List<Robot>, Output) -> Unit,
+) {
     if (!all && names.isEmpty()) throw UsageError("name a robot, or use --all")
     val out = Output(format ?: globals.format)
     val code = runBlocking {
         val progress = Progress()
         var robots = emptyList<Robot>()
+        var listening = emptyList<Job>()
         try {
             progress.show("looking for robots")
             // Robots named by name or address end the search once all are found; ids and --all need the whole scan;
@@ -130,8 +159,15 @@ fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Bo
             val found = if (!all && names.all { deviceAt(it) != null }) emptyList() else globals.sources.scan(enough = { f ->
                 !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
             })
-            robots = connectRobots(found, names, all, globals.options, progress)
-            coroutineScope { block(robots, out) } // a failure of any robot's part surfaces as itself
+            robots = connectRobots(found, names, all, globals.options.copy(role = role), progress)
+            listening = robots.map { r -> launch { r.events.collect { tell(r, it) } } }
+            if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
+                throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
+            }
+            coroutineScope { // a failure of any robot's part surfaces as itself
+                val watch = launch { throw linkGone(robots) }
+                try { block(robots, out) } finally { watch.cancel() }
+            }
             out.flush()
             Exit.OK
         } catch (e: CliktError) {
@@ -139,10 +175,11 @@ fun robotCommand(globals: Globals, format: Format?, names: List<String>, all: Bo
         } catch (e: Exception) {
             progress.clear()
             out.flush()
-            System.err.println("pocketbot: ${e.message ?: e}")
+            System.err.println("pocketbot: ${e.message ?: e}" + if (e is NotDriverException) " (use --take-over)" else "")
             Exit.of(e)
         } finally {
-            for (r in robots) r.disconnect()
+            listening.forEach { it.cancel() }
+            for (r in robots) r.disconnect(onLeave)
         }
     }
     if (code != Exit.OK) throw com.github.ajalt.clikt.core.ProgramResult(code)

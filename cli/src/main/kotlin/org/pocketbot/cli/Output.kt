@@ -1,10 +1,13 @@
 package org.pocketbot.cli
 
+import kotlinx.serialization.ExperimentalSerializationApi
 import kotlinx.serialization.json.JsonArray
 import kotlinx.serialization.json.JsonElement
 import kotlinx.serialization.json.JsonNull
 import kotlinx.serialization.json.JsonObject
 import kotlinx.serialization.json.JsonPrimitive
+import kotlinx.serialization.json.JsonUnquotedLiteral
+import org.pocketbot.sdk.toDecimalString
 import java.io.PrintStream
 
 /** How results are printed: a table for people, one JSON object per line or CSV for scripts. */
@@ -66,8 +69,8 @@ class Output(private val format: Format, private val out: PrintStream = System.o
 
     private fun text(v: Any?): String = when (v) {
         null -> ""
-        is Double -> if (v == Math.rint(v) && kotlin.math.abs(v) < 1e15) v.toLong().toString() else v.toString()
-        is Float -> text(v.toDouble())
+        is Double -> v.toDecimalString()
+        is Float -> v.toDecimalString()
         is List<*> -> v.joinToString(" ") { text(it) }
         is Enum<*> -> v.name.lowercase()
         else -> v.toString()
@@ -75,8 +78,12 @@ class Output(private val format: Format, private val out: PrintStream = System.o
 
     private fun csv(s: String): String = if (s.any { it == ',' || it == '"' || it == '\n' }) "\"" + s.replace("\"", "\"\"") + "\"" else s
 
+    @OptIn(ExperimentalSerializationApi::class)
     private fun json(v: Any?): JsonElement = when (v) {
         null -> JsonNull
+        // The digits people read, as a number: exact for the robot's floats, never in scientific notation.
+        is Double -> if (v.isFinite()) JsonUnquotedLiteral(v.toDecimalString()) else JsonNull
+        is Float -> if (v.isFinite()) JsonUnquotedLiteral(v.toDecimalString()) else JsonNull
         is Number -> JsonPrimitive(v)
         is Boolean -> JsonPrimitive(v)
         is List<*> -> JsonArray(v.map { json(it) })

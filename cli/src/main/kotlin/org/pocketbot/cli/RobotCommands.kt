@@ -13,6 +13,7 @@ import com.github.ajalt.clikt.parameters.options.default
 import com.github.ajalt.clikt.parameters.options.flag
 import com.github.ajalt.clikt.parameters.options.option
 import com.github.ajalt.clikt.parameters.options.split
+import com.github.ajalt.clikt.parameters.types.choice
 import com.github.ajalt.clikt.parameters.types.double
 import com.github.ajalt.clikt.parameters.types.int
 import com.github.ajalt.clikt.parameters.types.restrictTo
@@ -25,23 +26,31 @@ import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.withTimeoutOrNull
+import kotlinx.coroutines.CancellationException
 import org.pocketbot.protocol.ColourMode
+import org.pocketbot.protocol.LocoMode
 import org.pocketbot.protocol.DebugModule
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugSource
 import org.pocketbot.sdk.Movement
+import org.pocketbot.sdk.MovementHandle
 import org.pocketbot.sdk.MovementOutcome
+import org.pocketbot.sdk.MovementResult
+import org.pocketbot.sdk.Pose
+import org.pocketbot.sdk.QueueOnLeave
+import org.pocketbot.sdk.Role
+import org.pocketbot.sdk.WheelDistances
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.SettingField
-import org.pocketbot.sdk.StateFields
 import java.io.File
 import kotlin.time.Duration.Companion.milliseconds
 
 /**
  * A command on one or more robots: `ROBOT ARGS...`, or `--all ARGS...` for every robot found. [extra] is how many
- * arguments may follow the robot.
+ * arguments may follow the robot. It watches the robots ([role]): it reads, and never disturbs the host that drives
+ * them; [DrivingCommand] changes them.
  */
 abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : CoreCliktCommand(name) {
     private val globals by requireObject<Globals>()
@@ -64,8 +73,17 @@ abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : 
         val names = if (all) emptyList() else listOfNotNull(words.firstOrNull())
         if (rest.size !in extra) throw UsageError("wrong number of arguments: ${words.joinToString(" ")}")
         try { check() } catch (e: IllegalArgumentException) { throw UsageError(e.message ?: "bad arguments") }
-        robotCommand(globals, format, names, all) { robots, out -> act(robots, out) }
+        robotCommand(globals, format, names, all, role(), mustDrive(), onLeave()) { robots, out -> act(robots, out) }
     }
+
+    /** What the command asks to be on the robots: it watches unless it changes them. */
+    protected open fun role(): Role = Role.WATCH
+
+    /** True when the command cannot do its work without driving the robots. */
+    protected open fun mustDrive(): Boolean = false
+
+    /** What the robots do with what the command queued once it leaves. */
+    protected open fun onLeave(): QueueOnLeave = QueueOnLeave.FINISH
 
     /** Checks the arguments before any robot is looked for. */
     protected open fun check() {}
@@ -75,6 +93,18 @@ abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : 
     /** Runs [each] on every robot at once. */
     protected suspend fun CoroutineScope.onEach(robots: List<Robot>, each: suspend (Robot) -> Unit) =
         robots.map { r -> async { each(r) } }.awaitAll()
+}
+
+/**
+ * A command that changes the robots: it drives them, and fails (exit 8) when another host drives one, unless
+ * `--take-over` takes it (that host is told).
+ */
+abstract class DrivingCommand(name: String, extra: IntRange = 0..0) : RobotCommand(name, extra) {
+    protected val takeOver by option("--take-over", help = "take the robot from the host that drives it (it is told, and watches)").flag()
+
+    override fun role(): Role = if (takeOver) Role.TAKE_OVER else Role.DRIVE
+
+    override fun mustDrive(): Boolean = true
 }
 
 class ScanCommand : CoreCliktCommand(name = "scan") {
@@ -98,7 +128,7 @@ class ScanCommand : CoreCliktCommand(name = "scan") {
 }
 
 class InfoCommand : RobotCommand("info") {
-    override fun help(context: Context) = "Identity, firmware and protocol version, layout hash and link of a robot.\n\nExample: pocketbot info PocketBot-1"
+    override fun help(context: Context) = "Identity, firmware and protocol version, layout hash, the host that drives it, and link of a robot.\n\nExample: pocketbot info PocketBot-1"
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         // The battery comes with the first full state after the handshake; a robot that sends none shows no battery.
@@ -110,8 +140,8 @@ class InfoCommand : RobotCommand("info") {
             out.row(
                 "name" to id.name, "id" to id.robotId, "address" to id.address, "firmware" to id.firmwareVersion,
                 "protocol" to id.protocolVersion, "layout" to "0x" + id.layoutHash.toString(16).uppercase(),
-                "battery_v" to state?.let { it.power.batteryMv / 1000.0 }, "frames_in" to stats.framesReceived, "frames_out" to stats.framesSent,
-                "dropped" to stats.dropped, "reconnects" to stats.reconnects,
+                "battery_v" to state?.let { it.power.batteryMv / 1000.0 }, "driver" to r.driving.value.driver,
+                "frames_in" to stats.framesReceived, "frames_out" to stats.framesSent, "dropped" to stats.dropped, "reconnects" to stats.reconnects,
             )
         }
     }
@@ -131,11 +161,11 @@ class SettingsCommand : CoreCliktCommand(name = "settings") {
 private fun field(robot: Robot, name: String): SettingField<*> =
     robot.settings[name] ?: throw IllegalArgumentException("no setting '$name' (see: pocketbot settings list)")
 
-/** The value as people read it: a binary32 setting without the digits its rounding adds (0.0004, not 3.9999999E-4). */
-private fun shown(f: SettingField<*>): Any? = (f.value as? Double)?.toFloat()?.toString()?.toDouble() ?: f.value
-
-private fun range(f: SettingField<*>): String = if (f.min != null && f.max != null) "${num(f.min!!)}..${num(f.max!!)}" else ""
-private fun num(d: Double): String = if (d == Math.rint(d)) d.toLong().toString() else d.toString()
+/**
+ * The value as people read it and scripts get it: a real number as the robot's binary32 float (printed as its
+ * shortest decimal, 0.0004, and a number in JSON), an enumeration by name, a list as a list.
+ */
+private fun shown(f: SettingField<*>): Any? = (f.value as? Double)?.toFloat() ?: f.value
 
 class SettingsList : RobotCommand("list", 0..1) {
     override fun help(context: Context) = "Every setting (or those of a GROUP) with value, unit, range and what it does.\n\nExample: pocketbot settings list PocketBot-1 line_pid"
@@ -146,7 +176,7 @@ class SettingsList : RobotCommand("list", 0..1) {
             val fields = r.settings.fields.filter { group == null || it.name.startsWith("$group.") || it.name == group }
             if (fields.isEmpty()) throw IllegalArgumentException("no settings group '$group'")
             for (f in fields) {
-                out.row(linkedMapOf("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to range(f), "doc" to f.doc)
+                out.row(linkedMapOf("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to f.rangeText, "doc" to f.doc)
                     .also { if (robots.size == 1) it.remove("robot") })
             }
         }
@@ -164,7 +194,7 @@ class SettingsGet : RobotCommand("get", 1..Int.MAX_VALUE) {
     }
 }
 
-class SettingsSet : RobotCommand("set", 2..2) {
+class SettingsSet : DrivingCommand("set", 2..2) {
     override fun help(context: Context) = """
         Writes NAME = VALUE (that field only) and reports the robot's acknowledgement, or its refusal (exit 4).
 
@@ -183,7 +213,7 @@ class SettingsSet : RobotCommand("set", 2..2) {
     }
 }
 
-class SettingsSave : RobotCommand("save") {
+class SettingsSave : DrivingCommand("save") {
     override fun help(context: Context) = "Saves the robot's settings to its EEPROM (they survive a reset).\n\nExample: pocketbot settings save --all"
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.settings.save()
@@ -191,7 +221,7 @@ class SettingsSave : RobotCommand("save") {
     }.let { }
 }
 
-class SettingsDefaults : RobotCommand("defaults") {
+class SettingsDefaults : DrivingCommand("defaults") {
     override fun help(context: Context) = "Loads the firmware's default settings (not saved until 'settings save').\n\nExample: pocketbot settings defaults PocketBot-1"
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.settings.loadDefaults()
@@ -232,7 +262,7 @@ class SettingsExport : RobotCommand("export", 0..1) {
     }
 }
 
-class SettingsImport : RobotCommand("import", 1..1) {
+class SettingsImport : DrivingCommand("import", 1..1) {
     override fun help(context: Context) = """
         Writes the settings in the JSON FILE (the export format; settings may be left out).
 
@@ -270,20 +300,28 @@ class SettingsImport : RobotCommand("import", 1..1) {
     }
 }
 
-class StateCommand : RobotCommand("state") {
+class StateCommand : DrivingCommand("state") {
     override fun help(context: Context) = """
-        Prints the robot's state once, or with --watch every state the robot sends (at --rate HZ) until stopped.
-        --fields picks fields or groups (wheels, line.position, ...).
+        Prints the robot's state once, or with --watch every state the robot sends until stopped. It only watches the
+        robot; --rate HZ asks it for that many full states a second (driving it to ask; while another host drives it,
+        its states come as that host chose them, unless --take-over).
 
-        Example: pocketbot state PocketBot-1 --watch --rate 20 --fields time.time_ms,wheels --csv
+        By default a few values in people's units: robot time, locomotion mode, speed, line position, battery and the
+        pose (x, y, heading: dead reckoning from the encoders since this command connected). --fields picks state
+        fields or groups (wheels, line.position, ...), pose, or all.
+
+        Example: pocketbot state PocketBot-1 --watch --rate 20 --fields time.time_ms,wheels,pose --csv
     """.trimIndent()
 
     private val watch by option("--watch", help = "keep printing until Ctrl-C (or --seconds)").flag()
-    private val rate by option("--rate", help = "states per second while watching (full state, 1..100)").int().restrictTo(1..100).default(10)
+    private val rate by option("--rate", help = "full states per second while watching, 1..100 (the robot's own rate when not given)").int().restrictTo(1..100)
     private val seconds by option("--seconds", help = "stop watching after this many seconds").double()
-    private val fields by option("--fields", help = "comma-separated fields or groups").split(",")
+    private val fields by option("--fields", help = "comma-separated state fields or groups, pose, or all").split(",")
 
-    private val selected by lazy { StateFields.select(fields ?: StateFields.all.map { it.name }) }
+    private val selected by lazy { fields?.let(StateColumns::select) ?: StateColumns.readable }
+
+    override fun role(): Role = if (rate != null) super.role() else Role.WATCH
+    override fun mustDrive(): Boolean = false
 
     override fun check() {
         selected // an unknown field is a usage error before any robot is looked for
@@ -291,7 +329,7 @@ class StateCommand : RobotCommand("state") {
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         fun print(r: Robot, s: RobotState) = out.row(linkedMapOf<String, Any?>("robot" to r.identity.name).apply {
-            for (f in selected) put(f.name, f.of(s))
+            for (c in selected) put(c.name, c.of(r, s))
         })
         if (!watch) {
             // The mirror is all zero until the robot's first state: print what the robot reported, not that.
@@ -299,13 +337,18 @@ class StateCommand : RobotCommand("state") {
             robots.zip(states).forEach { (r, s) -> print(r, s) }
             return
         }
-        onEach(robots) { r -> r.reflector.set(SyncMode.FULL, (1000 / rate).milliseconds) }
+        rate?.let { hz ->
+            onEach(robots) { r ->
+                if (r.driving.value.byThisHost) r.reflector.set(SyncMode.FULL, (1000 / hz).milliseconds)
+                else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its state comes as that host chose (--take-over to set the rate)")
+            }
+        }
         out.stream(linkedMapOf("robot" to robots.maxOf { it.identity.name.length }) + selected.associate { it.name to it.width })
         withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
             val printers = robots.map { r -> launch { r.stateUpdates.collect { print(r, it.state) } } }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}: ${gone.connection.value}")
+            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
         }
     }
 }
@@ -315,11 +358,13 @@ private suspend fun firstLost(robots: List<Robot>): Robot = channelFlow {
     for (r in robots) launch { r.connection.first { it is ConnectionState.Lost || it is ConnectionState.Closed }; send(r) }
 }.first()
 
-class ConsoleCommand : RobotCommand("console") {
+class ConsoleCommand : DrivingCommand("console") {
     override fun help(context: Context) = """
-        Prints the robot's debug text, and the SDK's messages about its link, until stopped.
+        Prints the robot's debug text, and the SDK's messages about its link, until stopped. It only watches the robot.
 
-        --level sets the robot's debug level first (1 errors, 2 info, 3 verbose, 4 trace).
+        --level sets the robot's debug level first (1 errors, 2 info, 3 verbose, 4 trace), driving it to do so and then
+        only watching (a host that waits to drive it gets it back); while another host drives it, the level stays as
+        it is, unless --take-over.
 
         Example: pocketbot console PocketBot-1 --level 3
     """.trimIndent()
@@ -327,8 +372,18 @@ class ConsoleCommand : RobotCommand("console") {
     private val level by option("--level", help = "the robot's debug level, 1..4").int().restrictTo(1..4)
     private val seconds by option("--seconds", help = "stop after this many seconds").double()
 
+    override fun role(): Role = if (level != null) super.role() else Role.WATCH
+    override fun mustDrive(): Boolean = false
+
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
-        level?.let { l -> onEach(robots) { it.settings.debug.level.set(l) } }
+        level?.let { l ->
+            onEach(robots) { r ->
+                if (r.driving.value.byThisHost) {
+                    r.settings.debug.level.set(l)
+                    r.setRole(Role.WATCH) // reading the console needs no drive: the robot is free for other hosts
+                } else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
+            }
+        }
         out.stream(linkedMapOf(
             "robot" to robots.maxOf { it.identity.name.length }, "level" to 1,
             "source" to (DebugModule.entries + DebugSource.entries).maxOf { it.name.length }, "text" to 0,
@@ -339,21 +394,31 @@ class ConsoleCommand : RobotCommand("console") {
             }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}")
+            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
         }
     }
 }
 
-class MoveCommand : RobotCommand("move", 2..3) {
+class MoveCommand : DrivingCommand("move", 2..3) {
     override fun help(context: Context) = """
         Queues a movement: 'straight DISTANCE_M', 'rotate ANGLE_DEG' or 'arc RADIUS_M ANGLE_DEG', at --speed m/s.
-        With --wait, returns when it ended and prints how (exit 0 only when it finished; 5 when the link failed it).
+        It ends line following or the track behaviour if the robot runs one (and says so).
+
+        With --wait, returns when it ended and prints how and how much of it was done (exit 0 only when it finished;
+        5 when the link failed it). A link that stays down for ${LINK_GRACE.inWholeSeconds} s ends the wait: the movement is
+        then 'lost', with what this host saw the robot do before (the robot's failsafe stops it on its own).
+        Without it, pocketbot leaves at once, saying goodbye: the robot finishes the movement (--on-leave drop: it
+        drops it). A pocketbot killed before its goodbye leaves the robot to its link failsafe, which stops it.
 
         Example: pocketbot move PocketBot-1 straight 0.2 --speed 0.15 --wait
     """.trimIndent()
 
     private val speed by option("--speed", help = "cruise speed, m/s").double().default(0.2)
     private val wait by option("--wait", help = "return when the movement ended").flag()
+    private val leave by option("--on-leave", help = "what the robot does with the movement when pocketbot leaves before it ended: finish (default) or drop")
+        .choice("finish" to QueueOnLeave.FINISH, "drop" to QueueOnLeave.DROP).default(QueueOnLeave.FINISH)
+
+    override fun onLeave(): QueueOnLeave = leave
 
     private val movement by lazy {
         val numbers = rest.drop(1).map { it.toDoubleOrNull() ?: throw UsageError("'$it' is not a number") }
@@ -374,30 +439,64 @@ class MoveCommand : RobotCommand("move", 2..3) {
     override fun check() { movement }
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
-        val results = robots.map { r ->
-            async {
-                val handle = r.locomotion.enqueue(movement)
-                if (!wait) {
-                    out.row("robot" to r.identity.name, "id" to handle.id, "movement" to movement.toString(), "status" to "queued")
-                    null
-                } else {
-                    val result = handle.await()
-                    out.row("robot" to r.identity.name, "id" to handle.id, "movement" to movement.toString(), "outcome" to result.outcome,
-                        "done" to result.done?.toFloat()?.toString()?.toDouble(), "unit" to movement.unit) // as the robot's float says it
-                    result.outcome
-                }
+        val moves = robots.map { r -> async { start(r) } }.awaitAll()
+        if (!wait) {
+            for (m in moves) {
+                out.row("robot" to m.robot.identity.name, "id" to m.handle.id, "movement" to movement.toString(), "status" to "queued",
+                    "on_leave" to if (leave == QueueOnLeave.FINISH) "the robot finishes it" else "the robot drops it")
             }
-        }.awaitAll()
+            return
+        }
+        val results = try {
+            moves.map { m -> async { m.handle.await().also { out.row(m.row(it)) } } }.awaitAll()
+        } catch (e: CancellationException) {
+            // A link stayed down (the command ends with exit 5): each movement still open, as far as this host saw it.
+            for (m in moves) if (!m.handle.isDone) out.row(m.row(null))
+            throw e
+        }
         out.flush()
         when {
-            results.any { it == MovementOutcome.FAILSAFE || it == MovementOutcome.LOST } -> throw ProgramResult(Exit.LINK_LOST)
-            results.any { it != null && it != MovementOutcome.FINISHED } -> throw ProgramResult(Exit.FAILED)
+            results.any { it.outcome == MovementOutcome.FAILSAFE || it.outcome == MovementOutcome.LOST } -> throw ProgramResult(Exit.LINK_LOST)
+            results.any { it.outcome != MovementOutcome.FINISHED } -> throw ProgramResult(Exit.FAILED)
         }
+    }
+
+    /** Queues the movement on [r], saying so when that ends the line following or track behaviour the robot ran. */
+    private suspend fun start(r: Robot): Started {
+        val mode = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }?.locomotion?.mode
+        val handle = r.locomotion.enqueue(movement)
+        val from = r.odometry.pose.value to r.odometry.wheelDistances.value
+        when (mode) {
+            LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.identity.name} was following the line: the movement ended that")
+            LocoMode.TRACK -> System.err.println("pocketbot: ${r.identity.name} ran the track behaviour: the movement ended that")
+            else -> {}
+        }
+        return Started(r, handle, from.first, from.second)
+    }
+
+    /** A movement the robot took, and where its odometry stood then. */
+    private inner class Started(val robot: Robot, val handle: MovementHandle, val pose: Pose, val wheels: WheelDistances) {
+        /**
+         * How much of it this host saw the robot do, from the odometry since the robot took it: metres for a straight,
+         * degrees for a rotation or an arc. For a movement whose end is not known (its robot was lost).
+         */
+        fun seen(): Double = when (movement) {
+            is Movement.Straight -> robot.odometry.wheelDistances.value.let { (it.leftM + it.rightM - wheels.leftM - wheels.rightM) / 2 }
+            else -> Math.toDegrees(robot.odometry.pose.value.headingRad - pose.headingRad)
+        }.let { kotlin.math.round(it * 1000) / 1000 }
+
+        /** Its row: how it ended, or with [result] null `lost` and what [seen] says. */
+        fun row(result: MovementResult?): Map<String, Any?> = linkedMapOf(
+            "robot" to robot.identity.name, "id" to handle.id, "movement" to movement.toString(),
+            "outcome" to (result?.outcome ?: MovementOutcome.LOST),
+            // The robot's own figure is a float: as it says it. Without one, what this host saw.
+            "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit,
+        )
     }
 }
 
 class StopCommand : RobotCommand("stop") {
-    override fun help(context: Context) = "Stops the robot: brakes along its profile, or with --now turns the motors off.\n\nExample: pocketbot stop --all"
+    override fun help(context: Context) = "Stops the robot: brakes along its profile, or with --now turns the motors off. Any host may stop a robot: no --take-over is needed, and the host that drives it keeps driving.\n\nExample: pocketbot stop --all"
     private val now by option("--now", help = "motors off at once").flag()
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.locomotion.stop(immediate = now)
@@ -405,7 +504,7 @@ class StopCommand : RobotCommand("stop") {
     }.let { }
 }
 
-class FollowCommand : RobotCommand("follow", 1..1) {
+class FollowCommand : DrivingCommand("follow", 1..1) {
     override fun help(context: Context) = """
         Starts or stops line following: 'start' or 'stop'.
 

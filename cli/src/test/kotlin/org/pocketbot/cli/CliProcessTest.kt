@@ -8,12 +8,19 @@ import org.junit.jupiter.api.AfterAll
 import org.junit.jupiter.api.BeforeAll
 import org.junit.jupiter.api.Test
 import org.junit.jupiter.api.TestInstance
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.launch
+import kotlinx.coroutines.runBlocking
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.Speed
-import org.pocketbot.protocol.Frames
-import org.pocketbot.protocol.MoveStraight
+import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.SETTINGS_FIELDS
-import org.pocketbot.protocol.Slip
+import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.Movement
+import org.pocketbot.sdk.RobotEvent
+import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.StateFields
+import org.pocketbot.sdk.connect
 import java.io.File
 import java.nio.ByteBuffer
 import java.nio.ByteOrder
@@ -81,7 +88,7 @@ class CliProcessTest {
         assertEquals(0, byName.code, "$byName")
         val row = jsonLines(byName.out).single()
         assertEquals(2, row["id"]!!.jsonPrimitive.content.toInt())
-        assertEquals("2", row["protocol"]!!.jsonPrimitive.content)
+        assertEquals(ProtocolInfo.VERSION.toString(), row["protocol"]!!.jsonPrimitive.content)
         assertTrue(row["battery_v"]!!.jsonPrimitive.content.toDouble() > 3.0, "$row")
 
         val byId = pocketbot("info", "1")
@@ -109,6 +116,7 @@ class CliProcessTest {
         val refused = pocketbot("settings", "set", "PocketBot-1", "speed_pid.kd", "-3")
         assertEquals(4, refused.code, "$refused")
         assertTrue(refused.err.contains("outside the range"), "$refused")
+        assertTrue(!refused.err.contains("settings_value") && !refused.err.contains("update_settings"), "no internal names: $refused")
         assertEquals(0.5f, robotFloat("speed_pid.kd", 1), "a refused value changes nothing")
 
         val unknown = pocketbot("settings", "set", "PocketBot-1", "speed_pid.nope", "1")
@@ -131,6 +139,46 @@ class CliProcessTest {
         assertEquals(0, everywhere.code, "$everywhere")
         assertEquals(2, jsonLines(everywhere.out).size, "$everywhere")
         assertEquals(0.25f to 0.25f, robotFloat("wheel_pid.kd", 1) to robotFloat("wheel_pid.kd", 2), "both robots hold the value")
+    }
+
+    @Test
+    fun floatSettingsReadAsTheShortestDecimalAndEnumSettingsByName() {
+        val set = pocketbot("settings", "set", "PocketBot-2", "line_pid.kp", "0.0004")
+        assertEquals(0, set.code, "$set")
+        assertTrue(Regex("""line_pid\.kp +0\.0004 +acknowledged""").containsMatchIn(set.out), "the echo reads as typed: $set")
+        val get = pocketbot("settings", "get", "PocketBot-2", "line_pid.kp")
+        assertTrue(Regex("""line_pid\.kp +0\.0004( |$)""", RegexOption.MULTILINE).containsMatchIn(get.out), "$get")
+        val json = pocketbot("settings", "get", "PocketBot-2", "line_pid.kp", "--json")
+        assertTrue(json.out.contains("\"value\":0.0004"), "JSON keeps a number, the float's shortest decimal: $json")
+        val export = pocketbot("settings", "export", "PocketBot-2")
+        assertTrue(Regex(""""kp": 0\.0004[,\n]""").containsMatchIn(export.out), export.out)
+        assertTrue(!Regex("""\d[eE]-?\d""").containsMatchIn(set.out + get.out + export.out), "no scientific notation for people")
+        assertTrue(Regex(""""accel_mps2": \d+(\.\d{1,4})?,""").containsMatchIn(export.out), "no float noise (0.15000000596...): $export")
+
+        val list = pocketbot("settings", "list", "PocketBot-2", "sync")
+        val mode = list.out.lines().single { it.startsWith("sync.mode") }
+        assertTrue(Regex("""sync\.mode +full +none, full, reduced """).containsMatchIn(mode), "an enum setting lists its names, not 0..2: $mode")
+        val reduced = pocketbot("settings", "set", "PocketBot-2", "sync.mode", "reduced")
+        assertEquals(0, reduced.code, "$reduced")
+        assertTrue(Regex("""sync\.mode +reduced +acknowledged""").containsMatchIn(reduced.out), "$reduced")
+        assertTrue(Regex(""""mode": "full"""").containsMatchIn(export.out), "the export names the mode: $export")
+        val number = pocketbot("settings", "set", "PocketBot-2", "sync.mode", "7")
+        assertEquals(2, number.code, "$number")
+        assertTrue(number.err.contains("none, full, reduced"), "$number")
+    }
+
+    @Test
+    fun stateOnceReadsAsAFewColumnsWithThePose() {
+        val run = pocketbot("state", "PocketBot-1")
+        assertEquals(0, run.code, "$run")
+        val (header, row) = run.out.lines().filter { it.isNotBlank() }
+        assertEquals(listOf("ROBOT", "TIME_S", "MODE", "SPEED_MPS", "LINE", "BATTERY_V", "X_M", "Y_M", "HEADING_DEG"), header.split(Regex(" +")), run.out)
+        assertTrue(row.length < 120, "one short line: $row")
+        val all = pocketbot("state", "PocketBot-1", "--fields", "all", "--json")
+        val fields = jsonLines(all.out).single().keys
+        assertEquals(listOf("robot") + StateFields.all.map { it.name } + listOf("pose.x_m", "pose.y_m", "pose.heading_deg"), fields.toList())
+        val pose = pocketbot("state", "PocketBot-1", "--fields", "pose,time", "--csv")
+        assertEquals("robot,pose.x_m,pose.y_m,pose.heading_deg,time.time_ms,time.tick_max_us,time.overruns,time.last_overrun_ms", pose.out.lines().first(), "$pose")
     }
 
     @Test
@@ -282,12 +330,71 @@ class CliProcessTest {
             "console", "PocketBot-2", "--level", "3", "--seconds", "8"))
         // The header comes once the robot is connected and at level 3 (the console listens from before that).
         console.awaitLine(Regex("^ROBOT +LEVEL +SOURCE +TEXT"))
-        // A movement sent straight into the robot's link: the firmware reports its start and end in debug text.
-        emulator.robot(2).hostSendRaw(Slip.encode(Frames.encode(MoveStraight(77, 0.02f, 0.1f), 250)))
-        console.awaitLine(Regex("^PocketBot-2 .*done 77"))
+        // Another host drives the robot meanwhile (the console only watches): the firmware reports the start and the end
+        // of its movement in debug text.
+        val id = runBlocking {
+            val host = emulator.robot(2).device().connect(this, RobotOptions(hostLabel = "script@test"))
+            host.locomotion.enqueue(Movement.Straight(0.02, 0.1)).id.also { host.disconnect() }
+        }
+        console.awaitLine(Regex("^PocketBot-2 .*done $id"))
         val run = console.await()
         assertEquals(0, run.code, "$run")
-        assertTrue(run.out.contains("start 77"), "$run")
+        assertTrue(run.out.contains("start $id"), "$run")
+    }
+
+    @Test
+    fun aCommandThatWatchesLeavesTheDriverAloneAndOneThatChangesTheRobotNeedsTakeOver() = runBlocking {
+        val panel = emulator.robot(1).device().connect(this, RobotOptions(hostLabel = "panel@test"))
+        val events = java.util.concurrent.LinkedBlockingQueue<RobotEvent>()
+        val listening = launch(Dispatchers.Default) { panel.events.collect { events.put(it) } }
+        try {
+            assertTrue(panel.driving.value.byThisHost, "the panel drives")
+            val info = pocketbot("--json", "info", "PocketBot-1")
+            assertEquals(0, info.code, "$info")
+            assertEquals("panel@test", jsonLines(info.out).single()["driver"]!!.jsonPrimitive.content)
+            assertEquals(ConnectionState.Connected, panel.connection.value, "info knocked nobody off")
+            assertTrue(panel.driving.value.byThisHost && events.isEmpty(), "the panel still drives: ${panel.driving.value}, $events")
+
+            val refused = pocketbot("move", "PocketBot-1", "straight", "0.05")
+            assertEquals(8, refused.code, "$refused")
+            assertEquals("pocketbot: PocketBot-1 is driven by panel@test (use --take-over)\n", refused.err)
+            assertEquals(0, emulator.robot(1).state().locomotion.queueLength, "nothing queued")
+
+            val taken = pocketbot("move", "PocketBot-1", "straight", "0.05", "--take-over", "--wait", "--json")
+            assertEquals(0, taken.code, "$taken")
+            assertEquals("finished", jsonLines(taken.out).single()["outcome"]!!.jsonPrimitive.content)
+            val told = events.poll(GUARD_SECONDS, java.util.concurrent.TimeUnit.SECONDS) as RobotEvent.DriverChanged
+            assertTrue(told.taken && told.driving.driver!!.startsWith("cli@"), "the panel was told: $told")
+            // The command left with a goodbye: the panel, which asked to drive, drives again.
+            until("the panel drives again") { panel.driving.value.byThisHost }
+        } finally {
+            listening.cancel()
+            panel.disconnect()
+        }
+    }
+
+    @Test
+    fun aMoveLeftToTheRobotIsFinishedAndOneWhoseCommandIsKilledIsStoppedByTheFailsafe() {
+        val robot = emulator.robot(2)
+        fun travelled(from: org.pocketbot.emulator.WheelDistances) = robot.trueWheelDistances.let { (it.leftM + it.rightM - from.leftM - from.rightM) / 2 }
+        val start = robot.trueWheelDistances
+        val run = pocketbot("move", "PocketBot-2", "straight", "1.0", "--speed", "0.25", "--json")
+        assertEquals(0, run.code, "$run")
+        val row = jsonLines(run.out).single()
+        assertEquals("queued", row["status"]!!.jsonPrimitive.content)
+        assertEquals("the robot finishes it", row["on_leave"]!!.jsonPrimitive.content)
+        val id = row["id"]!!.jsonPrimitive.content.toInt()
+        until("the robot finished the movement after pocketbot left") { robot.state().locomotion.finishedId == id }
+        assertEquals(1.0, travelled(start), 0.01, "the whole metre, by the ground truth")
+
+        val from = robot.trueWheelDistances
+        val killed = PocketBotProcess(listOf("--control-port", controlPort.toString(), "--sources", "emulator", "--scan-seconds", "2",
+            "move", "PocketBot-2", "straight", "1.0", "--speed", "0.25", "--wait"))
+        until("the robot moves") { robot.state().locomotion.mode.name == "MOVEMENT" }
+        Thread.sleep(500)
+        killed.kill() // no goodbye
+        until("the failsafe stopped it") { robot.state().locomotion.mode.name == "FAILSAFE" }
+        assertTrue(travelled(from) < 0.6, "stopped after ${travelled(from)} m")
     }
 
     @Test

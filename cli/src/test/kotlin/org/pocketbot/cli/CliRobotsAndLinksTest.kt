@@ -1,6 +1,7 @@
 package org.pocketbot.cli
 
 import kotlinx.serialization.json.jsonPrimitive
+import org.junit.jupiter.api.Assumptions.assumeFalse
 import org.junit.jupiter.api.Assumptions.assumeTrue
 import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.Emulator
@@ -83,6 +84,17 @@ class CliRobotsAndLinksTest {
         assertTrue(run.err.contains("hello_request not acknowledged"), "$run")
         val nobody = runPocketBot(listOf("info", "tcp://127.0.0.1:1"))
         assertEquals(5, nobody.code, "nothing listening is no timeout but a link that cannot be made: $nobody")
+        assertEquals(1, Regex("127\\.0\\.0\\.1:1\\b").findAll(nobody.err).count(), "the address once: $nobody")
+        assertTrue(nobody.err.contains("connection refused", ignoreCase = true), "$nobody")
+    }
+
+    @Test
+    fun aScanWithoutABluetoothAdapterSaysSoWithoutAskingDBus() {
+        assumeFalse(File("/sys/class/bluetooth/hci0").exists(), "this machine has a Bluetooth adapter")
+        val run = runPocketBot(listOf("--sources", "bluetooth", "--scan-seconds", "30", "scan"))
+        assertEquals(3, run.code, "$run")
+        assertTrue(run.err.contains("no Bluetooth adapter hci0 on this machine"), "$run")
+        assertFalse(run.err.contains("D-Bus") || run.err.contains("system bus"), "the bus is not even asked: $run")
     }
 
     @Test

@@ -105,11 +105,10 @@ fun serveAddress(text: String): InetSocketAddress? {
     return try { InetSocketAddress(ListenAddress.parse(host), port) } catch (e: IllegalArgumentException) { null }
 }
 
-/** Connects the embedded robots, puts their odometry on their true start pose, and starts them following the line. */
+/** Connects the embedded robots (their odometry on their true start pose) and starts them following the line. */
 suspend fun startFleet(model: PanelModel, speedsMps: List<Double> = listOf(0.15)) {
     val robots = model.connectEmbedded()
     robots.forEachIndexed { i, r ->
-        r.emulated?.let { r.robot.odometry.reset(it.truePose) }
         r.startLineFollowing(speedsMps[i % speedsMps.size], org.pocketbot.protocol.ColourMode.PLAIN)
     }
 }

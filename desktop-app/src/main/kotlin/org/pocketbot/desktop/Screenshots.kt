@@ -12,14 +12,19 @@ import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.ui.View
 import org.pocketbot.sdk.Controller
 import org.pocketbot.sdk.Movement
+import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.Role
+import org.pocketbot.sdk.StaleReason
+import org.pocketbot.sdk.connect
 import java.awt.Rectangle
 import java.io.File
 import javax.imageio.ImageIO
 
 /**
  * `make screenshots`: drives the real panel (under Xvfb) through its main views with the embedded fleet running and
- * writes a PNG of the window for each to [dir], the overview, the world and the track behaviour's card on the track
- * world with the behaviour running (thesis A.3), then calls [done].
+ * writes a PNG of the window for each to [dir], the panel watching a robot another host took over, the sensors of a
+ * robot whose link went down (`stale`), the overview, the world and the track behaviour's card on the track world with
+ * the behaviour running (thesis A.3), then calls [done].
  */
 @Composable
 fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<View>, dir: File, done: () -> Unit) {
@@ -57,12 +62,28 @@ fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<Vie
         tuned.movements.first { it.size == 3 && it.all { m -> m.result != null } }
         tuned.enqueue(Movement.Straight(0.3, 0.1))
         shoot(View.COMMANDS, "commands")
+        // Another host (as `pocketbot --take-over` does) takes the robot over: the panel watches it and says who drives.
+        tuned.movements.first { it.last().result != null }
+        val other = tuned.emulated!!.device().connect(this, RobotOptions(role = Role.TAKE_OVER, hostLabel = "cli@lab-pc"))
+        other.locomotion.enqueue(Movement.Rotate(180.0, 0.1))
+        tuned.driving.first { !it.byThisHost }
+        shoot(View.COMMANDS, "watching")
+        other.disconnect()
+        tuned.driving.first { it.byThisHost }
+        // What the user was told of it (taken over, then driving again) is not part of the next views.
+        model.notices.first { n -> n.any { it.text.startsWith("this panel drives") } }.forEach(model::dismiss)
         // Track (thesis A.3): three robots on the track world running the behaviour: the overview with its track
         // column, the world with the token holder's orange light, and the token holder's Commands view.
         tuned.movements.first { it.last().result != null } // ended before its robot goes with the old world
+        // Stale: a robot whose link went down (its emulator's link cut), every value greyed with its age.
+        val gone = robots.last()
+        model.select(gone)
+        gone.emulated?.disconnectLink()
+        gone.robot.freshness.first { it.reduced.staleBecause == StaleReason.LINK_DOWN }
+        shoot(View.SENSORS, "stale", settle = 5000)
+        gone.emulated?.reconnectLink()
         model.restartEmulator("track", 3)
         val onTrack = model.robots.first { it.size == 3 && it.none { r -> r in robots } }
-        onTrack.forEach { r -> r.emulated?.let { r.robot.odometry.reset(it.truePose) } }
         model.everyRobot { it.startTrack() }
         delay(8000) // the robots get going and meet
         fun selectTokenHolder() = model.select(onTrack.firstOrNull { it.robot.track.holdsToken } ?: onTrack.first())

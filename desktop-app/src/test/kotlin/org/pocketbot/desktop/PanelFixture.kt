@@ -10,6 +10,7 @@ import org.pocketbot.emulator.transport.ListenAddress
 import org.pocketbot.protocol.FieldType
 import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.sdk.InMemorySettingsCache
+import org.pocketbot.sdk.HostLabel
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.transport.Discoverer
 import java.net.InetSocketAddress
@@ -29,7 +30,7 @@ class PanelFixture(
 ) : AutoCloseable {
     val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
     val emulator = EmulatorModel(scope, world, robots, serveAt = serveAt)
-    val panel = PanelModel(scope, sources, emulator, RobotOptions(settingsCache = InMemorySettingsCache()))
+    val panel = PanelModel(scope, sources, emulator, RobotOptions(settingsCache = InMemorySettingsCache(), hostLabel = HostLabel.of("panel")))
 
     /** The float setting [name] as the emulated robot [id] holds it in its own settings bytes. */
     fun robotFloat(name: String, id: Int = 1): Float {

@@ -17,6 +17,7 @@ import org.pocketbot.protocol.Colour
 import org.pocketbot.protocol.LocoMode
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.toDecimalString
 import org.pocketbot.sdk.transport.Discoverer
 import org.pocketbot.sdk.transport.TcpRobotDevice
 import kotlin.math.abs
@@ -188,7 +189,7 @@ class PanelFleetUiTest {
             onNodeWithTag("settings-defaults").performClick()
             waitUntil(timeoutMillis = guard) { f.robotFloat("line_pid.kd") == default }
             // The field shows what the robot holds now.
-            waitUntil(timeoutMillis = guard) { onNodeWithTag("setting-line_pid.kd").text() == default.toDouble().toString() }
+            waitUntil(timeoutMillis = guard) { onNodeWithTag("setting-line_pid.kd").text() == default.toDecimalString() }
         }
     }
 

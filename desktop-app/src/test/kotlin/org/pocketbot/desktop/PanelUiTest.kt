@@ -11,6 +11,7 @@ import androidx.compose.ui.test.runComposeUiTest
 import org.pocketbot.desktop.ui.PanelApp
 import org.pocketbot.protocol.LocoMode
 import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.Controller
 import kotlin.math.abs
 import kotlin.test.Test
 import kotlin.test.assertEquals
@@ -113,7 +114,8 @@ class PanelUiTest {
             onNodeWithTag("tuning-start").performClick()
             waitUntil(timeoutMillis = guard) { robot.robot.reflector.mode.value == SyncMode.REDUCED }
             onNodeWithTag("step-test").performClick()
-            waitUntil(timeoutMillis = guard) { robot.tuning.captured.value != null }
+            onNodeWithTag("step-confirm").performClick()
+            waitUntil(timeoutMillis = guard) { robot.tuning.captured != null }
             val live = robot.tuning.live.snapshot()
             assertTrue(live.size > 300, "only ${live.size} samples")
             // Reduced state comes every sample period of robot time: a gap means a sample never reached the chart.
@@ -124,17 +126,9 @@ class PanelUiTest {
             val charted = robot.tuning.live.added.get()
             val sent = robot.robot.linkStats.value.reducedStates - robot.tuning.reducedAtStart
             assertTrue(sent - charted in 0..2, "charted $charted of $sent reduced states") // the newest may still be on its way
-            val first = robot.tuning.captured.value!!
+            val first = robot.tuning.captured!!
             assertTrue(first.samples.maxOf { it.measured } > 0.12, "the wheel did not reach its step: $first")
             waitUntil(timeoutMillis = guard) { onNodeWithTag("step-figures").text().contains("rise") }
-
-            // While tuned, what full states alone carry is greyed as stale, here and on the sensors view.
-            onNodeWithTag("tab-SENSORS").performClick()
-            waitUntil(timeoutMillis = guard) { exists("stale-banner") }
-            assertTrue(onNodeWithTag("loco-mode").isStale(), "the locomotion mode is not live while tuned")
-            assertTrue(onNodeWithTag("line-bars").isStale(), "the line spots are not live while tuned")
-            assertTrue(!onNodeWithTag("line-status").isStale(), "the line position is live while tuned")
-            onNodeWithTag("tab-TUNING").performClick()
 
             // +: the gain times 1.25, written to the robot; -: times 0.8.
             val kp = robot.robot.settings.wheelPid.kp.value
@@ -147,8 +141,9 @@ class PanelUiTest {
             // Freeze the first run as the reference: the next run is drawn over it.
             onNodeWithTag("tuning-freeze").performClick()
             onNodeWithTag("step-test").performClick()
-            waitUntil(timeoutMillis = guard) { robot.tuning.captured.value !== first && robot.tuning.running.value.not() }
-            assertTrue(robot.tuning.previous.value === first, "the frozen run stays the reference")
+            onNodeWithTag("step-confirm").performClick()
+            waitUntil(timeoutMillis = guard) { robot.tuning.captured !== first && robot.tuning.running.value.not() }
+            assertTrue(robot.tuning.capturesOf(Controller.WHEEL_SPEED).reference === first, "the frozen run stays the reference")
             waitUntil(timeoutMillis = guard) { onNodeWithTag("step-chart").description().contains("reference measured") }
             assertTrue(onNodeWithTag("step-chart").description().contains("this run measured"), onNodeWithTag("step-chart").description())
 

@@ -9,6 +9,7 @@ import androidx.compose.ui.test.captureToImage
 import androidx.compose.ui.test.onNodeWithTag
 import androidx.compose.ui.test.onRoot
 import androidx.compose.ui.test.performClick
+import androidx.compose.ui.test.performTextReplacement
 import androidx.compose.ui.test.runComposeUiTest
 import androidx.compose.ui.test.runDesktopComposeUiTest
 import kotlinx.coroutines.runBlocking
@@ -98,6 +99,31 @@ class PanelWorldUiTest {
             val holder = robots.single { r -> snapshot.robots.single { it.address == r.address }.holdsToken }
             val description = onNodeWithTag("world-canvas").description()
             assertTrue(description.endsWith("the track token is with ${holder.name}"), description)
+        }
+    }
+
+    @Test
+    fun odometryOutlinesStartOnTheirRobotsAfterAReconnectAndAWorldRestart() = PanelFixture(world = "round").use { f ->
+        runComposeUiTest {
+            setContent { PanelApp(f.panel) }
+            fun offsets() = f.panel.robots.value.map { r -> r.name to r.robot.odometry.pose.value.distanceTo(r.emulated!!.truePose) }
+            fun onTheirRobots() = f.panel.robots.value.isNotEmpty() && offsets().all { it.second < 0.005 }
+            connectRobot(f)
+            await("the outline on its robot", ::offsets, ::onTheirRobots)
+
+            onNodeWithTag("disconnect-PocketBot-1").performClick()
+            await("disconnected") { f.panel.robots.value.isEmpty() }
+            connectRobot(f)
+            await("the outline on its robot after a reconnect", ::offsets, ::onTheirRobots)
+
+            onNodeWithTag("tab-WORLD").performClick()
+            onNodeWithTag("world-straight").performClick()
+            onNodeWithTag("emu-robots").performTextReplacement("2")
+            onNodeWithTag("emu-restart").performClick()
+            await("two robots on the new world", { f.panel.robots.value.map { it.name } }) {
+                f.emulator.world.value.world.name == "straight" && f.panel.robots.value.size == 2
+            }
+            await("every outline on its robot after the world restart", ::offsets, ::onTheirRobots)
         }
     }
 

@@ -25,6 +25,12 @@ fun SemanticsNodeInteraction.description(): String =
 fun SemanticsNodeInteraction.isStale(): Boolean =
     fetchSemanticsNode().config.getOrElse(SemanticsProperties.StateDescription) { "" } == "stale"
 
+/** True when the node is a selected choice (a chip, a tab, a radio button). */
+fun SemanticsNodeInteraction.isSelected(): Boolean = fetchSemanticsNode().config.let { c ->
+    c.getOrElse(SemanticsProperties.Selected) { false } ||
+        c.getOrElse(SemanticsProperties.ToggleableState) { androidx.compose.ui.state.ToggleableState.Off } == androidx.compose.ui.state.ToggleableState.On
+}
+
 @OptIn(ExperimentalTestApi::class)
 fun ComposeUiTest.exists(tag: String): Boolean = onAllNodes(hasTestTag(tag)).fetchSemanticsNodes().isNotEmpty()
 

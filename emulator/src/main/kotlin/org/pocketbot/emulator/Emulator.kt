@@ -353,7 +353,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
 
     /**
      * A hash of everything simulated: time, every robot's true pose, wheel travel and whole firmware memory,
-     * the bytes its link delivered to a host (count and CRC-32), and the boxes. Two runs of the same world, seed and host traffic give the same hash.
+     * the bytes each of its links delivered to a host (count and CRC-32), and the boxes. Two runs of the same world, seed and host traffic give the same hash.
      */
     public fun stateHash(): String = synchronized(lock) {
         val md = MessageDigest.getInstance("SHA-256")
@@ -364,7 +364,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
             put(r.x, r.y, r.theta, r.distL, r.distR, r.vl, r.vr)
             val mem = r.firmware.memory
             md.update(mem.readBytes(0, mem.size))
-            buf.clear(); buf.putLong(r.link.bytesToHost); buf.putLong(r.link.bytesToHostCrc); md.update(buf.array(), 0, 16)
+            for (l in r.links.all) { buf.clear(); buf.putLong(l.bytesToHost); buf.putLong(l.bytesToHostCrc); md.update(buf.array(), 0, 16) }
         }
         for (b in sim.boxes) put(b.x, b.y)
         md.digest().joinToString("") { "%02x".format(it) }
@@ -373,7 +373,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     override fun close() {
         stop()
         stopTcp()
-        for (h in robots) h.sim.link.dropConnection("emulator closed")
+        for (h in robots) h.sim.links.dropConnections("emulator closed")
         // Under the lock: a loop thread that outlived stop()'s wait is between steps when the firmware goes.
         synchronized(lock) {
             closed = true

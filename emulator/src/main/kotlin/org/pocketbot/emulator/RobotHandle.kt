@@ -46,7 +46,8 @@ public class RobotHandle internal constructor(
     /**
      * Power-cycles this robot: its firmware starts afresh (a new instance, all RAM lost) at the current simulated
      * time and sends `hello` as a real robot does at reset; the EEPROM (settings saved with `save_settings`) is
-     * kept. The body, its pose and the host link stay as they are; a connected host stays connected.
+     * kept. The body and its pose stay as they are; the host on the robot's first link (its UART) stays connected and
+     * gets the hello, hosts on its other links lose them (as a Bluetooth robot's links drop when it resets).
      */
     public fun reset(): Unit = synchronized(lock) { sim.reset(emulator.timeTicks) }
 
@@ -88,50 +89,61 @@ public class RobotHandle internal constructor(
 
     // ---- link and faults ----------------------------------------------------------------------------------------
 
-    /** The link model now; assign to change it while running (fault injection). */
+    /** The link model of every host link now; assign to change it while running (fault injection). */
     public var link: LinkSettings
-        get() = sim.link.settings
-        set(value) { sim.link.applySettings(value) }
+        get() = sim.links.settings
+        set(value) { sim.links.applySettings(value) }
 
     /** Sensor noise and wheel slip of this robot; assign to change them while running. */
     public var noise: NoiseSettings
         get() = sim.noise
         set(value) = synchronized(lock) { sim.noise = value }
 
-    /** Takes the link down: host connections are lost and nothing passes until [reconnectLink]. */
+    /** Takes the links down: host connections are lost and nothing passes until [reconnectLink]. */
     public fun disconnectLink() { link = link.withConnected(false) }
 
     public fun reconnectLink() { link = link.withConnected(true) }
 
-    /** Bytes the link delivered to a host, lost, and corrupted so far. */
-    public val linkBytesToHost: Long get() = sim.link.bytesToHost
-    public val linkBytesLost: Long get() = sim.link.bytesLost
-    public val linkBytesCorrupted: Long get() = sim.link.bytesCorrupted
+    /** Bytes the links delivered to hosts, lost, and corrupted so far. */
+    public val linkBytesToHost: Long get() = sim.links.bytesToHost
+    public val linkBytesLost: Long get() = sim.links.bytesLost
+    public val linkBytesCorrupted: Long get() = sim.links.bytesCorrupted
 
-    /** Host bytes the link dropped because its buffer ([LinkSettings.bufferBytes]) was full: a host that sends
+    /** Host bytes the links dropped because their buffer ([LinkSettings.bufferBytes]) was full: a host that sends
      *  faster than the baud rate carries. */
-    public val linkBytesOverflowed: Long get() = sim.link.bytesOverflowed
+    public val linkBytesOverflowed: Long get() = sim.links.bytesOverflowed
+
+    /** How many hosts the robot can serve at once: its firmware's host links. */
+    public val hostLinks: Int get() = sim.links.all.size
+
+    /** How many hosts are connected to it now (in process and over TCP). */
+    public val hostsConnected: Int get() = sim.links.attached
 
     // ---- connections --------------------------------------------------------------------------------------------
 
     public val address: String get() = "emulator:$id"
 
-    /** Puts raw bytes (SLIP frames) on the robot's link as if a host had sent them, without a connection. */
-    public fun hostSendRaw(bytes: ByteArray) { sim.link.hostSend(bytes) }
+    /** Puts raw bytes (SLIP frames) on the robot's first link (its UART) as if a host had sent them, without a
+     *  connection; the firmware is told a host came when none is on that link. */
+    public fun hostSendRaw(bytes: ByteArray) { sim.link.rawSend(bytes) }
 
-    /** Opens an in-process transport (SLIP through the simulated link). */
-    public fun openTransport(): Transport = InProcessTransport(sim.link, address)
+    /** Opens an in-process transport (SLIP through a simulated link of its own); throws
+     *  [org.pocketbot.sdk.transport.TransportLostException] when every host link of the robot is in use. */
+    public fun openTransport(): Transport = InProcessTransport(sim.links, address)
 
     /** This robot as a discoverable device. */
-    public fun device(): RobotDevice = InProcessDevice(name, address, sim.link)
+    public fun device(): RobotDevice = InProcessDevice(name, address, sim.links)
 
     private var tcp: TcpEndpoint? = null
 
     /** The TCP port of this robot's endpoint, or -1 when it has none. */
     public val tcpPort: Int get() = tcp?.port ?: -1
 
-    /** The host connected to this robot's TCP endpoint now (address and port), or null. */
-    public val tcpClient: InetSocketAddress? get() = tcp?.client
+    /** The first of [tcpClients], or null. */
+    public val tcpClient: InetSocketAddress? get() = tcpClients.firstOrNull()
+
+    /** The hosts connected to this robot's TCP endpoint now (address and port), in the order they came. */
+    public val tcpClients: List<InetSocketAddress> get() = tcp?.clients ?: emptyList()
 
     /**
      * Opens a TCP endpoint for this robot on [listen]:[port] (0: any free port); returns the port. By default only
@@ -140,7 +152,7 @@ public class RobotHandle internal constructor(
      */
     public fun startTcp(port: Int = 0, listen: InetAddress = ListenAddress.LOOPBACK): Int = synchronized(this) {
         tcp?.let { return it.port }
-        TcpEndpoint(sim.link, listen, port, "robot-$id").also { tcp = it }.port
+        TcpEndpoint(sim.links, listen, port, "robot-$id").also { tcp = it }.port
     }
 
     internal fun closeTcp() { synchronized(this) { tcp?.close(); tcp = null } }

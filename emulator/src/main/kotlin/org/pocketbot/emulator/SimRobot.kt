@@ -4,10 +4,10 @@ import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.firmware.FirmwareInstance
 import org.pocketbot.emulator.firmware.SimSensor
 import org.pocketbot.emulator.link.RobotLink
+import org.pocketbot.emulator.link.RobotLinks
 import org.pocketbot.emulator.physics.Obb
 import org.pocketbot.emulator.physics.RobotParams
 import org.pocketbot.sdk.Pose
-import java.util.SplittableRandom
 import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.math.cos
@@ -43,7 +43,7 @@ internal class SimRobot(
     // Streams per robot (by its place in the fleet: ids repeat in fleets over 254), fixed by the seed.
     // The sensor stream is the firmware's too: its simulation HAL draws each reading's noise from it (sim_inputs_t).
     private val sensorRng = SplitMix64(seed * 0x9E3779B97F4A7C15uL.toLong() + index * 0x2545F491L + id)
-    val link = RobotLink(SplittableRandom(seed * 31 + index * 0x5DEECE66DL + id * 7919L + 7))
+    private val linkSeed = seed * 31 + index * 0x5DEECE66DL + id * 7919L + 7
 
     private val encPhaseL = sensorRng.nextDouble() * params.stripePairM
     private val encPhaseR = sensorRng.nextDouble() * params.stripePairM
@@ -84,6 +84,13 @@ internal class SimRobot(
     private val image = image
     var firmware: FirmwareInstance = image.instantiate(); private set
 
+    /** The robot's host links, as many as its firmware serves. */
+    val links = RobotLinks(firmware.linkCount, linkSeed)
+    /** Link 0, the UART: the only one of a robot with one host. */
+    val link: RobotLink get() = links.all[0]
+    /** Bit k: the firmware has link k open (it opens the UART at reset; the others when a host comes). */
+    private var firmwareLinks = 1
+
     /** Set by the emulator while a step defers this robot to the serial contact phase. */
     var deferred = false
 
@@ -111,6 +118,10 @@ internal class SimRobot(
         firmware = image.instantiate()
         if (eeprom != null) firmware.loadEeprom(eeprom)
         irInCount = 0
+        // The fresh firmware has only its UART open; a robot's reset drops its other links (as a Bluetooth robot's
+        // does), so their hosts reconnect and hear that it restarted.
+        firmwareLinks = 1
+        for (l in links.all) if (l.index > 0) l.dropConnection("the robot was reset")
         bootAt(now)
     }
 
@@ -182,42 +193,67 @@ internal class SimRobot(
             }
             irInCount = 0
         }
-        // Host bytes and encoder edges at their own times, merged in time order and handed over in one batch.
-        link.scheduleHostBytes(t0)
-        var e = 0
+        // Host bytes and encoder edges at their own times, merged in time order and handed over in one batch; hosts that
+        // came first, hosts that left last (after their last byte).
+        val hostLinks = activeLinks()
         var queued = 0
+        for (k in 0 until hostLinks) {
+            val l = links.all[k]
+            if (l.takeOpen()) { fw.putEvent(queued++, t0 - bootTicks, FirmwareInstance.EVENT_LINK_OPEN, k); firmwareLinks = firmwareLinks or (1 shl k) }
+            l.scheduleHostBytes(t0)
+        }
+        var e = 0
         while (true) {
             val te = if (e < nEdges) edgeTimes[e] else Long.MAX_VALUE
-            val tr = link.nextRxTime()
+            var rx = link
+            for (k in 1 until hostLinks) if (links.all[k].nextRxTime() < rx.nextRxTime()) rx = links.all[k]
+            val tr = rx.nextRxTime()
             if (tr < t1 && tr <= te) {
-                fw.putEvent(queued++, tr - bootTicks, FirmwareInstance.EVENT_UART_RX, link.popRx())
+                val k = rx.index
+                if (k == 0) fw.putEvent(queued++, tr - bootTicks, FirmwareInstance.EVENT_UART_RX, rx.popRx())
+                else fw.putEvent(queued++, tr - bootTicks, FirmwareInstance.EVENT_LINK_RX, k shl 8 or rx.popRx())
             } else if (te <= t1) {
                 fw.putEvent(queued++, te - bootTicks, FirmwareInstance.EVENT_ENCODER_EDGE, edgeWheels[e]); e++
             } else break
             if (queued == FirmwareInstance.EVENT_CAPACITY) { fw.runEvents(queued, -1); queued = 0 }
         }
+        for (k in 0 until hostLinks) {
+            if (queued == FirmwareInstance.EVENT_CAPACITY) { fw.runEvents(queued, -1); queued = 0 }
+            if (links.all[k].takeClose()) { fw.putEvent(queued++, t1 - bootTicks, FirmwareInstance.EVENT_LINK_CLOSE, k); firmwareLinks = firmwareLinks and (1 shl k).inv() }
+        }
         fw.runEvents(queued, t1 - bootTicks)
         readOutputs()
 
-        // The UART drains at the baud rate. With no host attached the bytes go nowhere, so it is enough to
-        // drain every few steps (saving a call into the firmware per step); the firmware sees the same rate.
+        // Each link drains at the baud rate. A link without a host sends its bytes nowhere, so it is enough to drain
+        // it every few steps (saving a call into the firmware per step); the firmware sees the same rate.
         txSteps++
-        val allowance = link.txAllowance(t1 - t0)
-        if (allowance > 0 && (txSteps >= IDLE_TX_STEPS || link.isAttached)) {
-            txSteps = 0
-            val n = fw.uartTxTake(allowance)
-            if (n > 0) {
-                val mem = fw.memory
-                val base = fw.txBufferAddress
-                for (k in 0 until n) txBuf[k] = mem.read(base + k)
-                link.robotSent(txBuf, n, t0)
+        val idleDrain = txSteps >= IDLE_TX_STEPS
+        if (idleDrain) txSteps = 0
+        for (k in 0 until hostLinks) {
+            val l = links.all[k]
+            val allowance = l.txAllowance(t1 - t0)
+            if (allowance > 0 && (firmwareLinks and (1 shl k)) != 0 && (idleDrain || l.isAttached)) {
+                val n = fw.linkTxTake(k, allowance)
+                if (n > 0) {
+                    val mem = fw.memory
+                    val base = fw.txBufferAddress
+                    for (i in 0 until n) txBuf[i] = mem.read(base + i)
+                    l.robotSent(txBuf, n, t0)
+                }
             }
+            l.deliverToHost(t1)
         }
         afterFirmware(fw)
-        link.deliverToHost(t1)
 
         updateBattery(dt)
         world.checkContacts(this)
+    }
+
+    /** How many links (from link 0) a step must look at: beyond the UART only while another link has a host or is open. */
+    private fun activeLinks(): Int {
+        val all = links.all
+        for (k in all.size - 1 downTo 1) if (all[k].isAttached || (firmwareLinks and (1 shl k)) != 0 || all[k].pending) return k + 1
+        return 1
     }
 
     private fun collectEdges(wheel: Int, u0: Double, u1: Double, t0: Long, start: Int): Int {

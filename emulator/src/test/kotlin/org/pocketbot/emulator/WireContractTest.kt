@@ -7,8 +7,11 @@ import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.Error as ErrorPacket
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.Goodbye
 import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.HelloRequest
+import org.pocketbot.protocol.HostRole
+import org.pocketbot.protocol.LeaveQueue
 import org.pocketbot.protocol.LoadDefaults
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveStraight
@@ -63,7 +66,7 @@ class WireContractTest {
     @Test
     fun `hello tells whether the session was resumed and the CRC of the settings`() = RealFirmware.emulator("straight").use { emu ->
         val robot = robotOffTheLine(emu)
-        TestHost(robot, session = 0xA11CEL).use { a ->
+        TestHost(robot, session = 0xA11CEL, handshake = false).use { a ->
             val first = a.hello()
             assertEquals(0, first.sessionResumed, "a new session")
             assertEquals(TestHost.HELLO_SEQ, a.received.last { it.second is Hello }.first, "the answer carries the request's sequence number")
@@ -75,10 +78,10 @@ class WireContractTest {
             assertEquals(Crc16.compute(robot.settingsBytes()), after.settingsCrc, "the CRC follows a change")
             assertTrue(after.settingsCrc != first.settingsCrc, "a change changes the CRC")
         }
-        TestHost(robot, session = 0xB0BL).use { b -> assertEquals(0, b.hello().sessionResumed, "another host") }
-        TestHost(robot, session = 0L).use { c ->
-            assertEquals(0, c.hello().sessionResumed, "no session")
-            assertEquals(0, c.hello().sessionResumed, "no session is never resumed")
+        TestHost(robot, session = 0xB0BL, handshake = false).use { b -> assertEquals(0, b.hello(role = HostRole.TAKE_OVER).sessionResumed, "another host") }
+        TestHost(robot, session = 0L, handshake = false).use { c ->
+            assertEquals(0, c.hello(role = HostRole.TAKE_OVER).sessionResumed, "no session")
+            assertEquals(0, c.hello(role = HostRole.TAKE_OVER).sessionResumed, "no session is never resumed")
         }
     }
 
@@ -110,10 +113,13 @@ class WireContractTest {
                 host.hello()
                 frames.forEach { host.sendFrame(it) }
                 assertTrue(host.runUntil(200.milliseconds) { (1..5).all { host.ackOf(it) != null } }, "acks in session $session")
+                // It leaves the robot to finish its queue (without the goodbye, the failsafe would end it).
+                host.send(Goodbye(LeaveQueue.FINISH.code))
+                host.run(20.milliseconds)
             }
         }
         TestHost(robot, session = 0xCCCCL).use { host ->
-            host.hello()
+            host.hello(role = HostRole.WATCH)
             host.runUntil(5.seconds) { robot.state().locomotion.queueLength == 0 }
             host.run(400.milliseconds)
             val log = host.readMovements()

@@ -23,17 +23,15 @@ import org.pocketbot.sdk.transport.Discoverer
 import org.pocketbot.sdk.transport.EmulatorDiscoverer
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.Transport
-import org.pocketbot.sdk.transport.TransportLostException
 import java.io.IOException
 import java.net.InetAddress
 import java.net.InetSocketAddress
 
 /**
- * One emulated robot as the world view draws it: its true pose, the path it really took, its status LEDs ([led], bits
- * of [org.pocketbot.protocol.LedFlags]: the track token's orange light among them), and the host that drives it over
- * the network ([drivenFrom], an IP address), if one does.
+ * One emulated robot as the world view draws it: its true pose, the path it really took, and its status LEDs ([led],
+ * bits of [org.pocketbot.protocol.LedFlags]: the track token's orange light among them).
  */
-class TrueRobot(val id: Int, val address: String, val pose: Pose, val path: Trajectory, val led: Int = 0, val drivenFrom: String? = null) {
+class TrueRobot(val id: Int, val address: String, val pose: Pose, val path: Trajectory, val led: Int = 0) {
     /** The robot holds the track token (thesis A.3): its orange light is on. */
     val holdsToken: Boolean get() = led and LedFlags.TOKEN != 0
 }
@@ -52,8 +50,8 @@ class WorldSnapshot(val world: World, val timeMs: Long, val robots: List<TrueRob
  * (or faster) on its own thread. The panel finds its robots like any others, through [discoverer].
  *
  * [serve] puts its robots on the network as well (TCP endpoints and a control port, as `make emulator` has them), so a
- * phone drives a robot the panel draws. A robot has one host at a time: one that connects over the network takes it
- * over, and the panel's own link to it waits (its reconnects are refused) until that host lets go.
+ * phone drives a robot the panel draws. Each robot serves several hosts at once: the panel and a phone both see it,
+ * and the robot lets one of them drive (the other watches until it takes over or the driver leaves).
  */
 class EmulatorModel(
     private val scope: CoroutineScope,
@@ -82,19 +80,9 @@ class EmulatorModel(
     /** The network address the emulator is served at, or null while only the panel reaches it. */
     val serving: StateFlow<Serving?> = _serving.asStateFlow()
 
-    /** Finds the robots of the emulator running now, in process. A robot a network host holds refuses the panel. */
+    /** Finds the robots of the emulator running now, in process. */
     val discoverer: Discoverer = object : Discoverer {
-        override fun discover(): Flow<RobotDevice> = emulator.discoverer().discover().map { YieldingDevice(it) }
-    }
-
-    /** A robot of ours that the panel opens only while no host on the network drives it, so that they do not fight. */
-    private inner class YieldingDevice(private val device: RobotDevice) : RobotDevice by device {
-        override suspend fun open(): Transport {
-            handleFor(device.address)?.tcpClient?.let { host ->
-                throw TransportLostException("${device.name} is driven from ${host.address.hostAddress} over the network")
-            }
-            return device.open()
-        }
+        override fun discover(): Flow<RobotDevice> = emulator.discoverer().discover()
     }
 
     /**
@@ -202,7 +190,7 @@ class EmulatorModel(
             val path = synchronized(paths) { paths.getOrPut(h.id) { Trajectory() } }
             val timeMs = e.time.inWholeMilliseconds
             path.add(timeMs, pose)
-            TrueRobot(h.id, h.address, pose, path, h.led, h.tcpClient?.address?.hostAddress)
+            TrueRobot(h.id, h.address, pose, path, h.led)
         }
         return WorldSnapshot(e.world, e.time.inWholeMilliseconds, robots, e.boxes())
     }

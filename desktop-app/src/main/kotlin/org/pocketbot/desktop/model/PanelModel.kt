@@ -16,6 +16,8 @@ import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeoutOrNull
 import org.pocketbot.emulator.transport.ListenAddress
+import org.pocketbot.sdk.HostLabel
+import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.ProtocolMismatchException
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.TrajectoryPoint
@@ -29,6 +31,23 @@ import kotlin.time.Duration.Companion.seconds
 /** A robot some discoverer found, and which one. */
 class FoundDevice(val device: RobotDevice, val source: String) {
     val address: String get() = device.address
+}
+
+/** The kinds of movement the form offers. */
+enum class MovementKind(val title: String) { STRAIGHT("Straight"), ROTATE("Rotate"), ARC("Arc") }
+
+/** The movement form as the user left it: the kind and the numbers as typed. */
+data class MovementDraft(val kind: MovementKind = MovementKind.STRAIGHT, val amount: String = "0.10", val radius: String = "0.10", val speed: String = "0.20") {
+    /** The movement these fields describe; [IllegalArgumentException] (or a [NumberFormatException]) says what is wrong. */
+    fun movement(): Movement {
+        val a = amount.trim().toDouble()
+        val v = speed.trim().toDouble()
+        return when (kind) {
+            MovementKind.STRAIGHT -> Movement.Straight(a, v)
+            MovementKind.ROTATE -> Movement.Rotate(a, v)
+            MovementKind.ARC -> Movement.Arc(radius.trim().toDouble(), a, v)
+        }
+    }
 }
 
 /** Something the user should read: a failed connect, a refused setting, a file that did not parse. */
@@ -45,7 +64,7 @@ class PanelModel(
     private val sources: Map<String, Discoverer>,
     /** The embedded emulator, or null when the panel runs without one. */
     val emulator: EmulatorModel?,
-    private val options: RobotOptions = RobotOptions(),
+    private val options: RobotOptions = RobotOptions(hostLabel = HostLabel.of("panel")),
 ) : AutoCloseable {
     private val _found = MutableStateFlow<List<FoundDevice>>(emptyList())
     private val _robots = MutableStateFlow<List<RobotModel>>(emptyList())
@@ -85,6 +104,12 @@ class PanelModel(
      */
     val connectFailures: StateFlow<Map<String, String>> = _connectFailures.asStateFlow()
 
+    /**
+     * What the user typed into the movement form: it outlives the view (another tab, another robot) and the robots
+     * (a reconnect, a world restarted), so it is kept here, not in the composable.
+     */
+    val movementDraft = MutableStateFlow(MovementDraft())
+
     /** Looks for robots with every source at once; each shows up as soon as its source finds it. */
     fun scan() {
         if (scanJob?.isActive == true) return
@@ -121,7 +146,10 @@ class PanelModel(
             scope.launch {
                 try {
                     val robot = d.device.connect(scope, options)
-                    val model = RobotModel(robot, scope, emulator?.handleFor(robot.identity.address), ::notify)
+                    val emulated = emulator?.handleFor(robot.identity.address)
+                    // The world view draws the odometry pose over the robot: it starts where the robot is, not at (0, 0).
+                    emulated?.let { robot.odometry.reset(it.truePose) }
+                    val model = RobotModel(robot, scope, emulated, ::notify)
                     _robots.update { (it + model).sortedWith(byName) }
                     if (_selected.value == null) _selected.value = model
                 } catch (e: CancellationException) {

@@ -12,19 +12,23 @@ import kotlinx.coroutines.isActive
 import kotlinx.coroutines.launch
 import org.pocketbot.emulator.RobotHandle
 import org.pocketbot.protocol.ColourMode
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.CommandTimeoutException
+import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugMessage
+import org.pocketbot.sdk.Driving
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementHandle
 import org.pocketbot.sdk.MovementResult
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotException
 import org.pocketbot.sdk.SettingField
 import org.pocketbot.sdk.SettingRefusedException
-import org.pocketbot.sdk.StateUpdate
+import org.pocketbot.sdk.StateFreshness
 import java.io.File
+import kotlin.time.TimeMark
+import kotlin.time.TimeSource
 
 /**
  * Where a setting's edit stands: written and waiting, confirmed by the robot, refused by it (or not a value at all),
@@ -37,25 +41,27 @@ sealed class EditStatus {
     data class NotConfirmed(val reason: String) : EditStatus()
 }
 
-/** What of a robot's [Robot.state] is current, by its sync mode. */
-enum class Freshness {
-    /** Full state: every value is live. */
-    ALL,
+/**
+ * One line of the console: a message, or the same message repeated [count] times in a row (the SDK's reconnect
+ * attempts while a robot is away, say), shown once with its count instead of once per repeat.
+ */
+class ConsoleLine(val message: DebugMessage, val count: Int = 1, val since: TimeMark = TimeSource.Monotonic.markNow()) {
+    /** The message as shown: the latest text, and how often it came since when. */
+    fun text(): String = message.toString() + if (count > 1) " · $count times in ${since.elapsedNow().inWholeSeconds} s" else ""
 
-    /** Reduced state (while tuning): only what reduced states carry (time, encoders, wheel speeds, line position). */
-    REDUCED,
+    /** True when [m] says the same as this line's message but for its numbers (attempt 7, attempt 8, ...). */
+    fun repeatedBy(m: DebugMessage): Boolean =
+        m.source == message.source && m.module == message.module && m.level == message.level && shape(m.text) == shape(message.text)
 
-    /** No state at all: every value is as the robot last sent it. */
-    NONE;
+    private fun shape(text: String) = text.replace(DIGITS, "#")
 
-    companion object {
-        fun of(mode: SyncMode): Freshness = when (mode) {
-            SyncMode.FULL -> ALL
-            SyncMode.REDUCED -> REDUCED
-            else -> NONE
-        }
+    private companion object {
+        val DIGITS = Regex("""\d+""")
     }
 }
+
+/** A robot's link that is down: since when, how many attempts to reconnect failed meanwhile, and the latest reason. */
+class LinkTrouble(val since: TimeMark, val attempts: Int, val reason: String)
 
 /**
  * A movement this panel queued, and how it ended once it did ([result]). A new value when it ends, so that a view of
@@ -68,7 +74,8 @@ class QueuedMovement(val handle: MovementHandle, val result: MovementResult? = n
 /**
  * One connected robot as the panel drives it: commands, settings edits with their status, the console, teleoperation
  * and tuning. Everything it does goes through the SDK's public API; failures become messages ([notify]), never
- * crashes.
+ * crashes. Another host may drive the robot ([driving]): the panel then watches it until the user takes it over
+ * ([takeOver]), and says so when the robot is taken from it, given back, or restarts.
  */
 class RobotModel(
     val robot: Robot,
@@ -82,7 +89,7 @@ class RobotModel(
 
     private val _movements = MutableStateFlow<List<QueuedMovement>>(emptyList())
     private val _edits = MutableStateFlow<Map<String, EditStatus>>(emptyMap())
-    private val _console = MutableStateFlow<List<DebugMessage>>(emptyList())
+    private val _console = MutableStateFlow<List<ConsoleLine>>(emptyList())
     private var teleop: Job? = null
     @Volatile private var wheelTarget = 0.0 to 0.0
 
@@ -96,25 +103,57 @@ class RobotModel(
     /** Counts reads of the whole settings struct (read all, defaults, import): edit fields start over from the robot's values. */
     val reloads: StateFlow<Int> = _reloads.asStateFlow()
 
-    /** The robot's debug text and the SDK's link messages, the last [MAX_CONSOLE]. */
-    val console: StateFlow<List<DebugMessage>> = _console.asStateFlow()
+    /** The robot's debug text and the SDK's link messages, the last [MAX_CONSOLE] lines, a repeated message as one. */
+    val console: StateFlow<List<ConsoleLine>> = _console.asStateFlow()
 
     /** PID tuning of this robot. */
     val tuning = TuningModel(robot, scope) { notify(it, true) }
 
-    private val _freshness = MutableStateFlow(Freshness.of(robot.reflector.mode.value))
-    /** Which values of [Robot.state] are live: views grey out the others (mode, battery, ... while tuning). */
-    val freshness: StateFlow<Freshness> = _freshness.asStateFlow()
+    /** Which values of [Robot.state] are live, and since when the others are not: views grey those, with their age. */
+    val freshness: StateFlow<StateFreshness> get() = robot.freshness
 
-    private val _lastFullStateMs = MutableStateFlow(robot.state.value.time.timeMs)
-    /** Robot time (ms) of the last full state: what greyed-out values date from. */
-    val lastFullStateMs: StateFlow<Long> = _lastFullStateMs.asStateFlow()
+    private val _linkTrouble = MutableStateFlow<LinkTrouble?>(null)
+    /** The link while it is down (since when, failed attempts, why), or null while it is up. */
+    val linkTrouble: StateFlow<LinkTrouble?> = _linkTrouble.asStateFlow()
+
+    /** Who drives the robot: this panel, another host (by its label), or none. */
+    val driving: StateFlow<Driving> get() = robot.driving
 
     private val jobs = listOf(
-        scope.launch { robot.debugLog.messages.collect { m -> _console.update { (it + m).takeLast(MAX_CONSOLE) } } },
-        scope.launch { robot.stateUpdates.collect { if (it.kind == StateUpdate.Kind.FULL) _lastFullStateMs.value = it.timeMs } },
-        scope.launch { robot.reflector.mode.collect { _freshness.value = Freshness.of(it) } },
+        scope.launch { robot.debugLog.messages.collect(::log) },
+        scope.launch { robot.connection.collect(::followLink) },
+        scope.launch { robot.events.collect(::tell) },
     )
+
+    private fun log(m: DebugMessage) = _console.update { lines ->
+        val last = lines.lastOrNull()
+        if (last != null && last.repeatedBy(m)) lines.dropLast(1) + ConsoleLine(m, last.count + 1, last.since)
+        else (lines + ConsoleLine(m)).takeLast(MAX_CONSOLE)
+    }
+
+    private fun followLink(c: ConnectionState) = _linkTrouble.update { t ->
+        when (c) {
+            ConnectionState.Connected, ConnectionState.Connecting -> null
+            is ConnectionState.Lost -> LinkTrouble(t?.since ?: TimeSource.Monotonic.markNow(), t?.attempts ?: 0, c.reason)
+            is ConnectionState.Reconnecting -> LinkTrouble(t?.since ?: TimeSource.Monotonic.markNow(), c.attempt - 1, t?.reason ?: "reconnecting")
+            is ConnectionState.Closed -> LinkTrouble(t?.since ?: TimeSource.Monotonic.markNow(), t?.attempts ?: 0, c.cause?.message ?: "closed")
+        }
+    }
+
+    /** Takes the robot from the host that drives it (which is told); the panel drives it from then on. */
+    fun takeOver() = act("take over") { robot.takeOver() }
+
+    private fun tell(event: RobotEvent) = when (event) {
+        is RobotEvent.DriverChanged -> when {
+            event.taken -> notify("$name was taken over by ${event.driving.driver ?: "another host"}: this panel only watches it now (Take over to drive it again)", true)
+            event.driving.byThisHost -> notify("this panel drives $name", false)
+            else -> {}
+        }
+        is RobotEvent.Restarted -> notify("$name restarted: its clock went back from ${seconds(event.lastSeenTimeMs)} to ${seconds(event.timeMs)}; " +
+            "what it had queued is gone", true)
+    }
+
+    private fun seconds(ms: Long) = "%.1f s".format(ms / 1000.0)
 
     /** Queues [movement]; it shows in [movements] at once and gets its result when it ends. */
     fun enqueue(movement: Movement) = act("enqueue $movement") {
@@ -169,7 +208,7 @@ class RobotModel(
             ?: return _edits.update { it + (TRACK_SPEED to EditStatus.Refused("not a number: $text")) }
         confirm(TRACK_SPEED, text) {
             robot.track.setSpeed(mps)
-            robot.settings.track.speedMps.value.toString()
+            robot.settings.track.speedMps.valueText
         }
     }
 
@@ -187,7 +226,7 @@ class RobotModel(
         confirm(name, text) {
             @Suppress("UNCHECKED_CAST")
             (field as SettingField<Any>).set(value!!)
-            field.value.toString()
+            field.valueText
         }
     }
 

@@ -8,11 +8,13 @@ import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
 import kotlinx.coroutines.flow.filter
+import kotlinx.coroutines.flow.update
 import kotlinx.coroutines.launch
 import org.pocketbot.sdk.Controller
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.StateUpdate
 import org.pocketbot.sdk.StepResponse
+import org.pocketbot.sdk.StepSize
 import org.pocketbot.sdk.Tuner
 import org.pocketbot.sdk.TuningSample
 import java.util.concurrent.atomic.AtomicLong
@@ -67,20 +69,24 @@ class SampleRing(val capacity: Int) {
     }
 }
 
+/** The step responses of one controller: the latest, the reference beside it, and whether the reference is frozen. */
+class Captures(val latest: StepResponse? = null, val reference: StepResponse? = null, val frozen: Boolean = false)
+
 /**
  * PID tuning of one robot, for the tuning view: while [active], the robot sends reduced state every [samplePeriod]
- * and every sample of the chosen [controller] goes into [live]; a step test captures a [StepResponse], which can be
- * frozen beside the previous one.
+ * and every sample of the chosen [controller] goes into [live]; a step test (of a size the user chose and confirmed)
+ * captures a [StepResponse], which can be frozen beside the previous one. Each controller keeps its own captures: the
+ * view shows the chosen controller's only.
  */
 class TuningModel(private val robot: Robot, private val scope: CoroutineScope, private val notify: (String) -> Unit) {
     private val tuner = Tuner(robot)
     private val _controller = MutableStateFlow(Controller.ROBOT_SPEED)
     private val _active = MutableStateFlow(false)
     private val _running = MutableStateFlow(false)
-    private val _captured = MutableStateFlow<StepResponse?>(null)
-    private val _previous = MutableStateFlow<StepResponse?>(null)
-    private val _frozen = MutableStateFlow(false)
+    private val _captures = MutableStateFlow<Map<Controller, Captures>>(emptyMap())
+    private val _stepSizes = MutableStateFlow(Controller.entries.associateWith(StepSize::defaultFor))
     private var collector: Job? = null
+    @Volatile private var left = false
 
     /** How often the robot sends a sample while tuned: as fast as its link carries ([Tuner.samplePeriod]). */
     val samplePeriod: Duration get() = tuner.samplePeriod
@@ -98,12 +104,17 @@ class TuningModel(private val robot: Robot, private val scope: CoroutineScope, p
     /** True while a step test runs. */
     val running: StateFlow<Boolean> = _running.asStateFlow()
 
-    /** The latest step response, and the one before it (for the overlay). */
-    val captured: StateFlow<StepResponse?> = _captured.asStateFlow()
-    val previous: StateFlow<StepResponse?> = _previous.asStateFlow()
+    /** Every controller's step responses (see [capturesOf]). */
+    val captures: StateFlow<Map<Controller, Captures>> = _captures.asStateFlow()
 
-    /** A frozen capture is kept: the next step test does not replace it, it becomes the overlay's newer run. */
-    val frozen: StateFlow<Boolean> = _frozen.asStateFlow()
+    /** The step size each controller's next step test runs, as last chosen. */
+    val stepSizes: StateFlow<Map<Controller, StepSize>> = _stepSizes.asStateFlow()
+
+    /** The step responses of [controller]: none until its first step test. */
+    fun capturesOf(controller: Controller): Captures = _captures.value[controller] ?: Captures()
+
+    /** The latest step response of the chosen controller. */
+    val captured: StepResponse? get() = capturesOf(_controller.value).latest
 
     /** Starts the live chart of [controller]: the robot switches to fast reduced state. */
     fun start(controller: Controller = _controller.value) {
@@ -130,7 +141,7 @@ class TuningModel(private val robot: Robot, private val scope: CoroutineScope, p
         }
     }
 
-    /** Switches the chart to [controller]. */
+    /** Switches the chart to [controller]; its own step responses show. */
     fun choose(controller: Controller) { if (_active.value) start(controller) else _controller.value = controller }
 
     /** Ends the live chart; the robot gets its sync mode back. */
@@ -145,30 +156,53 @@ class TuningModel(private val robot: Robot, private val scope: CoroutineScope, p
 
     fun stopLater() { scope.launch { stop() } }
 
-    /** Runs the controller's standard manoeuvre and captures its response. The robot moves. */
-    fun stepTest() {
+    /** The user opened the tuning view (again): a step test that runs there keeps the robot tuned when it ends. */
+    fun enter() {
+        left = false
+    }
+
+    /**
+     * The user left the tuning view: the robot goes back to its sync mode (full state for every other view) at once,
+     * or when the step test that runs has ended.
+     */
+    fun leave() {
+        left = true
+        if (!_running.value) stopLater()
+    }
+
+    /**
+     * Runs the chosen controller's manoeuvre at [size] (the user confirmed what [StepSize.describe] says the robot will
+     * do) and captures its response. The robot moves.
+     */
+    fun stepTest(size: StepSize = _stepSizes.value.getValue(_controller.value)) {
         if (_running.value) return
         _running.value = true
+        val controller = _controller.value
+        _stepSizes.update { it + (controller to size) }
         scope.launch {
             try {
                 if (!_active.value) start()
-                val response = tuner.stepTest(_controller.value)
-                if (!_frozen.value) _previous.value = _captured.value
-                _captured.value = response
+                val response = tuner.stepTest(controller, size)
+                _captures.update { all ->
+                    val c = all[controller] ?: Captures()
+                    all + (controller to Captures(response, if (c.frozen) c.reference else c.latest, c.frozen))
+                }
             } catch (e: CancellationException) {
                 throw e
             } catch (e: Exception) {
                 notify("${robot.identity.name}: step test: ${e.message ?: e}")
             } finally {
                 _running.value = false
+                if (left) stop()
             }
         }
     }
 
-    /** Keeps the current capture as the overlay's reference (or lets it go again). */
-    fun toggleFreeze() {
-        _frozen.value = !_frozen.value
-        if (_frozen.value) _previous.value = _captured.value
+    /** Keeps the chosen controller's current capture as the overlay's reference (or lets it go again). */
+    fun toggleFreeze() = _captures.update { all ->
+        val controller = _controller.value
+        val c = all[controller] ?: Captures()
+        all + (controller to if (c.frozen) Captures(c.latest, c.reference, false) else Captures(c.latest, c.latest, true))
     }
 
     /** The gain [name] (kp, ki, kd) of the chosen controller, changed by [factor] (the +/- buttons). */
@@ -177,7 +211,7 @@ class TuningModel(private val robot: Robot, private val scope: CoroutineScope, p
         val field = when (name) { "kp" -> gains.kp; "ki" -> gains.ki; else -> gains.kd }
         val now = field.value
         val next = if (now == 0.0) (if (factor > 1) GAIN_FROM_ZERO else 0.0) else now * factor
-        write(field.name, String.format(java.util.Locale.ROOT, "%.6g", next))
+        write(field.name, field.format(next))
     }
 
     companion object {

@@ -29,6 +29,7 @@ import androidx.compose.ui.graphics.Color
 import androidx.compose.ui.platform.testTag
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
+import org.pocketbot.desktop.model.RobotModel
 
 /** The panel's main views, as tabs. */
 enum class View(val title: String) {
@@ -51,8 +52,9 @@ fun PanelApp(model: PanelModel, view: MutableState<View> = remember { mutableSta
                                 modifier = Modifier.testTag("tab-${v.name}"))
                         }
                     }
+                    val selected by model.selected.collectAsState()
+                    selected?.let { WatchingBanner(it) }
                     Box(Modifier.weight(1f).fillMaxWidth().padding(12.dp)) {
-                        val selected by model.selected.collectAsState()
                         when (view.value) {
                             View.OVERVIEW -> OverviewView(model)
                             View.WORLD -> WorldView(model)
@@ -76,6 +78,23 @@ fun PanelApp(model: PanelModel, view: MutableState<View> = remember { mutableSta
                     Notices(model)
                 }
             }
+        }
+    }
+}
+
+/**
+ * While another host drives the selected robot: who, that the panel only watches (its commands are refused), and the
+ * button that takes the robot over.
+ */
+@Composable
+private fun WatchingBanner(robot: RobotModel) {
+    val driving by robot.driving.collectAsState()
+    if (driving.byThisHost) return
+    Surface(color = MaterialTheme.colorScheme.tertiaryContainer, modifier = Modifier.fillMaxWidth().testTag("watching-banner")) {
+        Row(Modifier.padding(horizontal = 12.dp), verticalAlignment = Alignment.CenterVertically) {
+            Text("${robot.name}: ${drivingText(driving)}. This panel shows its state and may stop it; its other commands are refused.",
+                Modifier.weight(1f), style = MaterialTheme.typography.bodyMedium)
+            TextButton(onClick = robot::takeOver, modifier = Modifier.testTag("banner-take-over")) { Text("Take over") }
         }
     }
 }

@@ -49,16 +49,16 @@ import androidx.compose.ui.input.pointer.pointerInput
 import androidx.compose.ui.platform.testTag
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.EditStatus
-import org.pocketbot.desktop.model.Freshness
+import org.pocketbot.desktop.model.MovementDraft
+import org.pocketbot.desktop.model.MovementKind
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.RobotModel
+import kotlinx.coroutines.flow.update
 import org.pocketbot.protocol.ColourMode
+import org.pocketbot.protocol.LocoMode
 import org.pocketbot.sdk.Movement
-import java.util.Locale
 import kotlin.math.hypot
 import kotlin.math.min
-
-private enum class Kind(val title: String) { STRAIGHT("Straight"), ROTATE("Rotate"), ARC("Arc") }
 
 /**
  * Movements, their queue and results, stop, teleoperation (keys and joystick), line following, and the track behaviour
@@ -69,7 +69,7 @@ fun CommandsView(robot: RobotModel, model: PanelModel) {
     Row(horizontalArrangement = Arrangement.spacedBy(12.dp)) {
         Column(Modifier.weight(1f).verticalScroll(rememberScrollState()), verticalArrangement = Arrangement.spacedBy(12.dp)) {
             Text("${robot.name}: commands", style = MaterialTheme.typography.titleLarge)
-            MovementForm(robot)
+            MovementForm(robot, model)
             Panel("Stop", Modifier.fillMaxWidth()) {
                 Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
                     Button(onClick = { robot.stop(immediate = false) }, Modifier.testTag("stop-braking")) { Text("Stop (braking)") }
@@ -86,63 +86,86 @@ fun CommandsView(robot: RobotModel, model: PanelModel) {
     }
 }
 
+/**
+ * The movement form. What is typed lives in [PanelModel.movementDraft]: another tab, another robot, a reconnect or a
+ * new world keep it. A movement ends line following or the track behaviour: while the robot runs one, the form asks
+ * before it enqueues.
+ */
 @Composable
-private fun MovementForm(robot: RobotModel) {
-    var kind by remember { mutableStateOf(Kind.STRAIGHT) }
-    var amount by remember { mutableStateOf("0.10") }
-    var radius by remember { mutableStateOf("0.10") }
-    var speed by remember { mutableStateOf("0.20") }
+private fun MovementForm(robot: RobotModel, model: PanelModel) {
+    val draft by model.movementDraft.collectAsState()
+    val mode by robot.robot.locomotion.state.collectAsState()
     var error by remember { mutableStateOf<String?>(null) }
+    var asking by remember(robot) { mutableStateOf<Movement?>(null) }
+    fun edit(change: (MovementDraft) -> MovementDraft) = model.movementDraft.update(change)
     Panel("Enqueue a movement", Modifier.fillMaxWidth()) {
         Row(horizontalArrangement = Arrangement.spacedBy(6.dp)) {
-            for (k in Kind.entries) FilterChip(selected = kind == k, onClick = {
-                kind = k
-                amount = if (k == Kind.STRAIGHT) "0.10" else "90"
+            for (k in MovementKind.entries) FilterChip(selected = draft.kind == k, onClick = {
+                edit { it.copy(kind = k, amount = if (k == MovementKind.STRAIGHT) "0.10" else if (it.kind == MovementKind.STRAIGHT) "90" else it.amount) }
             }, label = { Text(k.title) }, modifier = Modifier.testTag("kind-${k.name}"))
         }
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
-            OutlinedTextField(amount, { amount = it }, Modifier.width(150.dp).testTag("move-amount"), singleLine = true,
-                label = { Text(if (kind == Kind.STRAIGHT) "distance m" else "angle °") })
-            if (kind == Kind.ARC) OutlinedTextField(radius, { radius = it }, Modifier.width(130.dp).testTag("move-radius"), singleLine = true, label = { Text("radius m") })
-            OutlinedTextField(speed, { speed = it }, Modifier.width(130.dp).testTag("move-speed"), singleLine = true, label = { Text("speed m/s") })
+            OutlinedTextField(draft.amount, { t -> edit { it.copy(amount = t) } }, Modifier.width(150.dp).testTag("move-amount"), singleLine = true,
+                label = { Text(if (draft.kind == MovementKind.STRAIGHT) "distance m" else "angle °") })
+            if (draft.kind == MovementKind.ARC) {
+                OutlinedTextField(draft.radius, { t -> edit { it.copy(radius = t) } }, Modifier.width(130.dp).testTag("move-radius"), singleLine = true,
+                    label = { Text("radius m") })
+            }
+            OutlinedTextField(draft.speed, { t -> edit { it.copy(speed = t) } }, Modifier.width(130.dp).testTag("move-speed"), singleLine = true,
+                label = { Text("speed m/s") })
+        }
+        val ends = when (mode.mode) {
+            LocoMode.LINE_FOLLOW -> "line following"
+            LocoMode.TRACK -> "the track behaviour"
+            else -> null
         }
         Button(onClick = {
             error = null
             try {
-                val a = amount.trim().toDouble()
-                val v = speed.trim().toDouble()
-                robot.enqueue(when (kind) {
-                    Kind.STRAIGHT -> Movement.Straight(a, v)
-                    Kind.ROTATE -> Movement.Rotate(a, v)
-                    Kind.ARC -> Movement.Arc(radius.trim().toDouble(), a, v)
-                })
+                val m = draft.movement()
+                if (ends != null) asking = m else robot.enqueue(m)
             } catch (e: IllegalArgumentException) {
                 error = e.message ?: "not a number"
             }
         }, Modifier.testTag("enqueue")) { Text("Enqueue") }
+        asking?.let { m ->
+            Text("${robot.name} runs ${ends ?: "another command"}: a movement ends ${ends ?: "it"}.", Modifier.testTag("enqueue-warning"),
+                color = MaterialTheme.colorScheme.error, style = MaterialTheme.typography.bodyMedium)
+            Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
+                Button(onClick = { asking = null; robot.enqueue(m) }, Modifier.testTag("enqueue-confirm")) { Text("Enqueue, ending ${ends ?: "it"}") }
+                OutlinedButton(onClick = { asking = null }, Modifier.testTag("enqueue-cancel")) { Text("Cancel") }
+            }
+        }
         error?.let { Text(it, color = MaterialTheme.colorScheme.error, modifier = Modifier.testTag("move-error")) }
     }
 }
 
+/**
+ * The movements queued from this panel, newest first: running (the robot reports it as its current one) or queued
+ * until they end, then how. What the robot reports is greyed, with its age, while it is not live.
+ */
 @Composable
 private fun MovementList(robot: RobotModel) {
     val movements by robot.movements.collectAsState()
     val state by robot.robot.locomotion.state.collectAsState()
     val freshness by robot.freshness.collectAsState()
-    val fullAt by robot.lastFullStateMs.collectAsState()
     Panel("Queue and results", Modifier.fillMaxWidth()) {
-        // Mode and queue come with full states only: while tuning they date from the last one, and say so.
-        val stale = freshness != Freshness.ALL
-        Text("robot: ${state.mode.name.lowercase()}, ${state.queueLength} queued" + if (stale) " (as of %.1f s, reduced sync)".format(fullAt / 1000.0) else "",
+        // Mode and queue come with full states only.
+        val stale = !freshness.full.isLive
+        val since = asOf(freshness.full).let { if (it.isEmpty()) "" else " ($it)" }
+        Text("robot: ${state.mode.name.lowercase()}, ${state.queueLength} queued$since",
             Modifier.testTag("robot-queue").stale(stale), style = MaterialTheme.typography.bodySmall, color = valueColour(stale))
         if (movements.isEmpty()) Text("Nothing queued from this panel yet.", style = MaterialTheme.typography.bodySmall)
         for (m in movements.asReversed()) {
             val result = m.result
+            val open = result == null
             Row(Modifier.fillMaxWidth().testTag("movement-${m.handle.id}")) {
                 Text("#${m.handle.id}", Modifier.width(72.dp), style = MaterialTheme.typography.bodySmall)
                 Text(m.text, Modifier.weight(1f).padding(end = 12.dp), style = MaterialTheme.typography.bodySmall)
-                Text(result?.let { r -> r.outcome.name.lowercase() + (r.done?.let { " (%.3f %s)".format(it, m.handle.movement.unit) } ?: "") } ?: "queued",
-                    Modifier.width(170.dp).testTag("result-${m.handle.id}"), style = MaterialTheme.typography.bodySmall)
+                val status = result?.let { r -> r.outcome.name.lowercase() + (r.done?.let { " (%.3f %s)".format(it, m.handle.movement.unit) } ?: "") }
+                    ?: ((if (state.currentId == m.handle.id) "running" else "queued") + since)
+                Text(status, Modifier.width(230.dp).testTag("result-${m.handle.id}").stale(open && stale), style = MaterialTheme.typography.bodySmall,
+                    color = valueColour(open && stale))
             }
         }
     }
@@ -153,6 +176,7 @@ private fun LineFollowing(robot: RobotModel) {
     var speed by remember { mutableStateOf("0.15") }
     var mode by remember { mutableStateOf(ColourMode.PLAIN) }
     val status by robot.robot.lineFollower.status.collectAsState()
+    val freshness by robot.freshness.collectAsState()
     Panel("Line following", Modifier.fillMaxWidth()) {
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
             OutlinedTextField(speed, { speed = it }, Modifier.width(130.dp).testTag("follow-speed"), singleLine = true, label = { Text("speed m/s") })
@@ -162,7 +186,9 @@ private fun LineFollowing(robot: RobotModel) {
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
             Button(onClick = { robot.startLineFollowing(speed.trim().toDoubleOrNull(), mode) }, Modifier.testTag("follow-start")) { Text("Start") }
             OutlinedButton(onClick = { robot.stopLineFollowing() }, Modifier.testTag("follow-stop")) { Text("Stop") }
-            Text("${status.status.name.lowercase()} · segment ${status.segment.name.lowercase()}", Modifier.testTag("follow-status"))
+            val stale = !freshness.full.isLive
+            Text("${status.status.name.lowercase()} · segment ${status.segment.name.lowercase()}", Modifier.testTag("follow-status").stale(stale),
+                color = valueColour(stale))
         }
     }
 }
@@ -184,7 +210,7 @@ private fun TrackBehaviour(robot: RobotModel, model: PanelModel) {
     val connection by robot.robot.connection.collectAsState()
     val freshness by robot.freshness.collectAsState()
     val robots by model.robots.collectAsState()
-    var speed by remember(robot) { mutableStateOf("%.2f".format(Locale.ROOT, robot.robot.settings.track.speedMps.value)) }
+    var speed by remember(robot) { mutableStateOf(robot.robot.settings.track.speedMps.valueText) }
     Panel("Track behaviour (thesis A.3)", Modifier.fillMaxWidth()) {
         // Compact buttons, a label above each group: the card fits half of a small window.
         val compact = PaddingValues(horizontal = 12.dp)
@@ -207,8 +233,8 @@ private fun TrackBehaviour(robot: RobotModel, model: PanelModel) {
             Text(describe(status, connection), Modifier.testTag("track-speed-status"), style = MaterialTheme.typography.bodySmall,
                 color = if (status is EditStatus.Refused) MaterialTheme.colorScheme.error else Color.Unspecified)
         }
-        // The track state comes with full states only: while tuning it dates from the last one.
-        val stale = freshness != Freshness.ALL
+        // The track state comes with full states only.
+        val stale = !freshness.full.isLive
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
             TokenLight(track.token != 0, Modifier.testTag(if (track.token != 0) "track-token" else "track-no-token"))
             val met = if (track.metId == 0) "nobody yet" else robots.firstOrNull { it.robot.identity.robotId == track.metId }?.name ?: "robot ${track.metId}"

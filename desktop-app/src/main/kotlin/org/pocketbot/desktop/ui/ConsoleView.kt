@@ -27,14 +27,17 @@ import org.pocketbot.desktop.model.RobotModel
 
 private val levels = listOf(1 to "errors", 2 to "info", 3 to "verbose", 4 to "trace")
 
-/** The robot's debug text (and the SDK's link messages), filtered by level; and the robot's own debug level. */
+/**
+ * The robot's debug text (and the SDK's link messages), filtered by level, a message repeated in a row shown once with
+ * its count; and the robot's own debug level.
+ */
 @Composable
 fun ConsoleView(robot: RobotModel) {
     val messages by robot.console.collectAsState()
     val values by robot.robot.settings.values.collectAsState()
     val robotLevel = remember(values) { robot.robot.settings.debug.level.value }
     var shown by remember { mutableStateOf(4) }
-    val visible = messages.filter { it.level <= shown }
+    val visible = messages.filter { it.message.level <= shown }
     val list = rememberLazyListState()
     LaunchedEffect(visible.size) { if (visible.isNotEmpty()) list.scrollToItem(visible.size - 1) }
     Column(verticalArrangement = Arrangement.spacedBy(8.dp)) {
@@ -49,9 +52,9 @@ fun ConsoleView(robot: RobotModel) {
             for ((l, name) in levels) FilterChip(robotLevel == l, { robot.setDebugLevel(l) }, { Text("set $name") }, Modifier.testTag("set-level-$l"))
         }
         LazyColumn(Modifier.fillMaxWidth().weight(1f).testTag("console"), state = list) {
-            items(visible) { m ->
-                Text(m.toString(), fontFamily = FontFamily.Monospace, style = MaterialTheme.typography.bodySmall,
-                    color = if (m.level <= 1) MaterialTheme.colorScheme.error else MaterialTheme.colorScheme.onSurface)
+            items(visible) { line ->
+                Text(line.text(), Modifier.testTag("console-line"), fontFamily = FontFamily.Monospace, style = MaterialTheme.typography.bodySmall,
+                    color = if (line.message.level <= 1) MaterialTheme.colorScheme.error else MaterialTheme.colorScheme.onSurface)
             }
         }
     }

@@ -27,9 +27,9 @@ import androidx.compose.ui.platform.testTag
 import androidx.compose.ui.text.style.TextOverflow
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
-import org.pocketbot.desktop.model.Freshness
 import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.protocol.LineFlags
+import org.pocketbot.sdk.StateFreshness
 
 private val columns = listOf("robot" to 160, "battery" to 80, "mode" to 110, "speed" to 110, "line" to 130, "track" to 190, "link" to 280)
 private val tableWidth = columns.sumOf { it.second }.dp
@@ -63,39 +63,47 @@ private fun OverviewRow(robot: RobotModel, selected: Boolean, onClick: () -> Uni
     Row(Modifier.width(tableWidth).graphicsLayer().background(bg).clickable(onClick = onClick).padding(vertical = 6.dp).testTag("overview-${robot.name}"),
         verticalAlignment = Alignment.CenterVertically) {
         StateCells(robot, freshness)
-        TrackCell(robot, Modifier.width(width("track")), stale = freshness != Freshness.ALL)
-        LinkCell(robot, Modifier.width(width("link")))
+        TrackCell(robot, Modifier.width(width("track")), stale = !freshness.full.isLive)
+        LinkCell(robot, freshness, Modifier.width(width("link")))
     }
 }
 
-/** The cells from the robot's state: composed again as the state changes (a few times a second), apart from the row. */
+/**
+ * The cells from the robot's state: composed again as the state changes (a few times a second), apart from the row.
+ * Battery and mode come with full states only; speed and line with reduced ones too: each is greyed when not live.
+ */
 @Composable
-private fun StateCells(robot: RobotModel, freshness: Freshness) {
+private fun StateCells(robot: RobotModel, freshness: StateFreshness) {
     val s by robot.robot.state.collectAtHumanRate()
     val line = s.line
-    val cells = listOf(
-        robot.name,
-        decimals(s.power.batteryMv / 1000.0, 2) + " V",
-        s.locomotion.mode.name.lowercase(),
-        decimals((s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0, 2) + " m/s",
-        if (line.flags and LineFlags.SEEN != 0) "${line.position} ‰" else "no line",
-    )
-    // Battery and mode come with full states only; speed and line with reduced ones too.
-    val stale = listOf(false, freshness != Freshness.ALL, freshness != Freshness.ALL, freshness == Freshness.NONE, freshness == Freshness.NONE)
-    cells.forEachIndexed { i, text ->
-        Text(text, Modifier.width(columns[i].second.dp).stale(stale[i]), style = MaterialTheme.typography.bodyMedium, color = valueColour(stale[i]),
-            maxLines = 1, overflow = TextOverflow.Ellipsis)
-    }
+    val full = !freshness.full.isLive
+    val reduced = !freshness.reduced.isLive
+    Text(robot.name, Modifier.width(width("robot")), style = MaterialTheme.typography.bodyMedium, maxLines = 1, overflow = TextOverflow.Ellipsis)
+    StateCell(robot, "battery", decimals(s.power.batteryMv / 1000.0, 2) + " V", full)
+    StateCell(robot, "mode", s.locomotion.mode.name.lowercase(), full)
+    StateCell(robot, "speed", decimals((s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0, 2) + " m/s", reduced)
+    StateCell(robot, "line", if (line.flags and LineFlags.SEEN != 0) "${line.position} ‰" else "no line", reduced)
 }
 
-/** The link's state and counters. */
 @Composable
-private fun LinkCell(robot: RobotModel, modifier: Modifier) {
+private fun StateCell(robot: RobotModel, column: String, text: String, stale: Boolean) {
+    Text(text, Modifier.width(width(column)).testTag("overview-$column-${robot.name}").stale(stale), style = MaterialTheme.typography.bodyMedium,
+        color = valueColour(stale), maxLines = 1, overflow = TextOverflow.Ellipsis)
+}
+
+/** The link's state and counters; while the values are not live, how old they are. */
+@Composable
+private fun LinkCell(robot: RobotModel, freshness: StateFreshness, modifier: Modifier) {
     val connection by robot.robot.connection.collectAsState()
+    val trouble by robot.linkTrouble.collectAsState()
     val stats by robot.robot.linkStats.collectAtHumanRate()
     Row(modifier, verticalAlignment = Alignment.CenterVertically) {
         Spacer(Modifier.size(8.dp).background(connectionColour(connection), CircleShape))
-        Text(" ${describe(connection)} · ${stats.framesReceived} frames · ${stats.reconnects} reconnects", style = MaterialTheme.typography.bodySmall,
+        if (!freshness.reduced.isLive) {
+            Text(" values ${asOf(freshness.reduced).removePrefix("as of ")} ·", Modifier.testTag("overview-age-${robot.name}"),
+                style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.error, maxLines = 1)
+        }
+        Text(" ${describe(connection, trouble)} · ${stats.framesReceived} frames · ${stats.reconnects} reconnects", style = MaterialTheme.typography.bodySmall,
             maxLines = 1, overflow = TextOverflow.Ellipsis)
     }
 }

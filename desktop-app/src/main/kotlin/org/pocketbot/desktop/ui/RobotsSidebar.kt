@@ -34,9 +34,11 @@ import androidx.compose.ui.graphics.Color
 import androidx.compose.ui.graphics.graphicsLayer
 import androidx.compose.ui.platform.testTag
 import androidx.compose.ui.unit.dp
+import org.pocketbot.desktop.model.LinkTrouble
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.Driving
 
 /** Finding and connecting robots, and the connected ones with their link, always in view. */
 @Composable
@@ -95,6 +97,7 @@ fun RobotsSidebar(model: PanelModel, modifier: Modifier = Modifier) {
 @Composable
 private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () -> Unit, onDisconnect: () -> Unit) {
     val connection by robot.robot.connection.collectAsState()
+    val trouble by robot.linkTrouble.collectAsState()
     val background = if (selected) MaterialTheme.colorScheme.primaryContainer else Color.Transparent
     // Its own layer: its link counters change a few times a second, and the rest of the list need not be drawn again.
     Column(Modifier.fillMaxWidth().graphicsLayer().background(background, MaterialTheme.shapes.small).clickable(onClick = onSelect)
@@ -104,9 +107,33 @@ private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () ->
             Text(" ${robot.name}", style = MaterialTheme.typography.bodyLarge, modifier = Modifier.weight(1f))
             TextButton(onClick = onDisconnect, modifier = Modifier.height(32.dp).testTag("disconnect-${robot.name}")) { Text("Disconnect") }
         }
-        Text("${describe(connection)} · ${robot.address}", style = MaterialTheme.typography.bodySmall)
+        val link = describe(connection, trouble)
+        // The address once: a failure's reason often names it already.
+        Text(if (robot.address in link) link else "$link · ${robot.address}", Modifier.testTag("robot-link-${robot.name}"),
+            style = MaterialTheme.typography.bodySmall)
+        Driver(robot)
         LinkCounters(robot)
     }
+}
+
+/** Who drives the robot, and while another host does, the button that takes it over. */
+@Composable
+private fun Driver(robot: RobotModel) {
+    val driving by robot.driving.collectAsState()
+    Row(verticalAlignment = Alignment.CenterVertically) {
+        Text(drivingText(driving), Modifier.weight(1f).testTag("driver-${robot.name}"), style = MaterialTheme.typography.bodySmall,
+            color = if (driving.byThisHost) MaterialTheme.colorScheme.onSurfaceVariant else MaterialTheme.colorScheme.primary)
+        if (!driving.byThisHost) {
+            TextButton(onClick = robot::takeOver, modifier = Modifier.height(32.dp).testTag("take-over-${robot.name}")) { Text("Take over") }
+        }
+    }
+}
+
+/** The panel's words for who drives a robot. */
+fun drivingText(d: Driving): String = when {
+    d.byThisHost -> "this panel drives it"
+    d.driver != null -> "watching: ${d.driver} drives it"
+    else -> "watching: no host drives it"
 }
 
 /** The part of a robot's card that keeps changing, in a scope of its own: the rest is not composed again with it. */
@@ -130,6 +157,20 @@ fun describe(c: ConnectionState): String = when (c) {
     is ConnectionState.Closed -> "closed" + (c.cause?.message?.let { ": $it" } ?: "")
     else -> c.toString()
 }
+
+/**
+ * The link in words, a link that stays down summed up (how long, how many attempts, why) instead of retold with every
+ * attempt.
+ */
+@Composable
+fun describe(c: ConnectionState, trouble: LinkTrouble?): String {
+    if (trouble == null || c is ConnectionState.Closed) return describe(c)
+    val seconds = secondsSince(trouble.since) ?: 0
+    val attempts = if (trouble.attempts > 0) ", ${trouble.attempts} attempts to reconnect failed" else ""
+    return "down for $seconds s$attempts: ${trouble.reason.replace(ATTEMPT, "")}"
+}
+
+private val ATTEMPT = Regex("""^reconnect attempt \d+ failed: """)
 
 fun connectionColour(c: ConnectionState): Color = when (c) {
     ConnectionState.Connected -> Color(0xFF2E7D32)

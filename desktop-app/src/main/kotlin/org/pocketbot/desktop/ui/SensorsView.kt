@@ -32,7 +32,6 @@ import androidx.compose.ui.semantics.semantics
 import androidx.compose.ui.semantics.stateDescription
 import androidx.compose.ui.text.font.FontStyle
 import androidx.compose.ui.unit.dp
-import org.pocketbot.desktop.model.Freshness
 import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.protocol.Colour
 import org.pocketbot.protocol.LineFlags
@@ -47,19 +46,19 @@ fun SensorsView(robot: RobotModel) {
     val s by robot.robot.state.collectAsState()
     val stats by robot.robot.linkStats.collectAsState()
     val freshness by robot.freshness.collectAsState()
-    val fullAt by robot.lastFullStateMs.collectAsState()
-    // What reduced states carry stays live while tuning; the rest is greyed: it dates from the last full state.
-    val old = freshness != Freshness.ALL
-    val all = freshness == Freshness.NONE
+    // What reduced states carry stays live while tuning; the rest is greyed: it dates from the last full state. A lost
+    // link greys everything.
+    val old = !freshness.full.isLive
+    val all = !freshness.reduced.isLive
     Column(Modifier.verticalScroll(rememberScrollState()), verticalArrangement = Arrangement.spacedBy(12.dp)) {
         Text("${robot.name}: sensors", style = MaterialTheme.typography.titleLarge)
-        StaleBanner(freshness, fullAt)
+        StaleBanner(freshness)
         Panel("Line sensor") { LineBars(s.line, rawStale = old, positionStale = all) }
         Row(horizontalArrangement = Arrangement.spacedBy(12.dp)) {
             Panel("Wheels", Modifier.weight(1f)) {
-                Value("encoders", "${s.encoders.left} / ${s.encoders.right} pulses", stale = all)
-                Value("speed", "${s.wheels.speedLeftMmps} / ${s.wheels.speedRightMmps} mm/s", stale = all)
-                Value("PWM", "${s.wheels.pwmLeft / 10.0} / ${s.wheels.pwmRight / 10.0} %", stale = old)
+                Value("encoders", "${s.encoders.left} / ${s.encoders.right} pulses", Modifier.testTag("wheels-encoders"), stale = all)
+                Value("speed", "${s.wheels.speedLeftMmps} / ${s.wheels.speedRightMmps} mm/s", Modifier.testTag("wheels-speed"), stale = all)
+                Value("PWM", "${decimals(s.wheels.pwmLeft / 10.0, 1)} / ${decimals(s.wheels.pwmRight / 10.0, 1)} %", Modifier.testTag("wheels-pwm"), stale = old)
             }
             Panel("IR proximity", Modifier.weight(1f)) {
                 Value("front", describe(s.proximity.front), Modifier.testTag("ir-front"), stale = old)
@@ -83,19 +82,20 @@ fun SensorsView(robot: RobotModel) {
                 Value("x / y / z", "${s.accel.xMg} / ${s.accel.yMg} / ${s.accel.zMg} mg", stale = old)
             }
             Panel("Power", Modifier.weight(1f)) {
-                Value("battery", "%.2f V".format(s.power.batteryMv / 1000.0), stale = old)
+                Value("battery", "%.2f V".format(s.power.batteryMv / 1000.0), Modifier.testTag("battery"), stale = old)
                 Value("current", "${s.power.currentMa} mA", stale = old)
                 Value("MCU", "%.1f °C".format(s.power.mcuTempDc / 10.0), stale = old)
             }
             Panel("Locomotion", Modifier.weight(1f)) {
                 Value("mode", s.locomotion.mode.name.lowercase(), Modifier.testTag("loco-mode"), stale = old)
-                Value("queue", "${s.locomotion.queueLength} (running #${s.locomotion.currentId}, last finished #${s.locomotion.finishedId})", stale = old)
+                Value("queue", "${s.locomotion.queueLength} (running #${s.locomotion.currentId}, last finished #${s.locomotion.finishedId})",
+                    Modifier.testTag("loco-queue"), stale = old)
                 Value("line follower", "${s.lineFollow.status.name.lowercase()} on ${s.lineFollow.segment.name.lowercase()}", stale = old)
             }
         }
         Row(horizontalArrangement = Arrangement.spacedBy(12.dp)) {
             Panel("Firmware", Modifier.weight(1f)) {
-                Value("robot time", "%.1f s".format(s.time.timeMs / 1000.0), stale = all)
+                Value("robot time", "%.1f s".format(s.time.timeMs / 1000.0), Modifier.testTag("robot-time"), stale = all)
                 Value("tick max", "${s.time.tickMaxUs} µs", stale = old)
                 Value("overruns", "${s.time.overruns}" + if (s.time.lastOverrunMs > 0) " (last at ${s.time.lastOverrunMs} ms)" else "", stale = old)
                 Value("robot errors", "crc ${s.errors.crc} · framing ${s.errors.framing} · rejected ${s.errors.rejected} · rx overflow ${s.errors.rxOverflow} · tx dropped ${s.errors.txDropped}", stale = old)
@@ -177,25 +177,5 @@ fun Value(label: String, value: String, valueModifier: Modifier = Modifier, stal
         Text(label, Modifier.width(110.dp), style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant)
         Text(value, valueModifier.stale(stale), style = MaterialTheme.typography.bodyMedium, color = valueColour(stale),
             fontStyle = if (stale) FontStyle.Italic else null)
-    }
-}
-
-/** Marks a value that dates from the last full state rather than being live. */
-fun Modifier.stale(stale: Boolean): Modifier = if (stale) semantics { stateDescription = "stale" } else this
-
-@Composable
-fun valueColour(stale: Boolean): Color = if (stale) MaterialTheme.colorScheme.onSurfaceVariant.copy(alpha = 0.5f) else Color.Unspecified
-
-/** Says which values are live while the robot is not in full sync, and since when the others are not. */
-@Composable
-fun StaleBanner(freshness: Freshness, fullStateMs: Long) {
-    val text = when (freshness) {
-        Freshness.ALL -> return
-        Freshness.REDUCED -> "Reduced state (PID tuning): robot time, encoders, wheel speeds and the line position are live; " +
-            "greyed values date from the last full state, at %.1f s of robot time.".format(fullStateMs / 1000.0)
-        Freshness.NONE -> "The robot sends no state (sync mode none): every value dates from %.1f s of robot time.".format(fullStateMs / 1000.0)
-    }
-    Surface(color = MaterialTheme.colorScheme.tertiaryContainer, shape = MaterialTheme.shapes.small) {
-        Text(text, Modifier.fillMaxWidth().padding(8.dp).testTag("stale-banner"), style = MaterialTheme.typography.bodySmall)
     }
 }

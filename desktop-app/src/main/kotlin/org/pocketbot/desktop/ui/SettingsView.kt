@@ -2,6 +2,8 @@ package org.pocketbot.desktop.ui
 
 import androidx.compose.foundation.layout.Arrangement
 import androidx.compose.foundation.layout.Column
+import androidx.compose.foundation.layout.ExperimentalLayoutApi
+import androidx.compose.foundation.layout.FlowRow
 import androidx.compose.foundation.layout.Row
 import androidx.compose.foundation.layout.fillMaxWidth
 import androidx.compose.foundation.layout.padding
@@ -10,7 +12,7 @@ import androidx.compose.foundation.lazy.LazyColumn
 import androidx.compose.foundation.lazy.items
 import androidx.compose.foundation.text.KeyboardActions
 import androidx.compose.foundation.text.KeyboardOptions
-import androidx.compose.material3.Button
+import androidx.compose.material3.FilterChip
 import androidx.compose.material3.HorizontalDivider
 import androidx.compose.material3.MaterialTheme
 import androidx.compose.material3.OutlinedButton
@@ -33,9 +35,11 @@ import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.EditStatus
 import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.EnumSetting
 import org.pocketbot.sdk.SettingField
 
 /** The whole settings tree, grouped by module, with units, ranges and docs; each edit writes that field only. */
+@OptIn(ExperimentalLayoutApi::class)
 @Composable
 fun SettingsView(robot: RobotModel) {
     val values by robot.robot.settings.values.collectAsState() // recompose on every confirmed change
@@ -44,8 +48,9 @@ fun SettingsView(robot: RobotModel) {
     val connection by robot.robot.connection.collectAsState()
     val groups = remember(robot) { robot.robot.settings.fields.groupBy { it.name.substringBefore('.') } }
     Column {
-        Row(verticalAlignment = Alignment.CenterVertically, horizontalArrangement = Arrangement.spacedBy(8.dp)) {
-            Text("${robot.name}: settings", style = MaterialTheme.typography.titleLarge, modifier = Modifier.weight(1f))
+        Text("${robot.name}: settings", style = MaterialTheme.typography.titleLarge)
+        // Wraps in a narrow window rather than squeezing the title or the list.
+        FlowRow(Modifier.padding(top = 4.dp), horizontalArrangement = Arrangement.spacedBy(8.dp), verticalArrangement = Arrangement.spacedBy(4.dp)) {
             OutlinedButton(onClick = { robot.readAllSettings() }, Modifier.testTag("settings-read")) { Text("Read all") }
             OutlinedButton(onClick = { robot.saveSettings() }, Modifier.testTag("settings-save")) { Text("Save to EEPROM") }
             OutlinedButton(onClick = { robot.loadDefaults() }, Modifier.testTag("settings-defaults")) { Text("Load defaults") }
@@ -67,39 +72,52 @@ fun SettingsView(robot: RobotModel) {
     }
 }
 
+/**
+ * One setting: its name and what it does, its value (typed, or an enumeration's names to click), the edit's status
+ * under it, unit and range. The value keeps its width in a narrow window; the description gives way.
+ */
 @Composable
 private fun SettingRow(field: SettingField<*>, status: EditStatus?, connection: ConnectionState, onWrite: (String) -> Unit) {
-    val current = field.value.toString()
+    val current = field.valueText
     var text by remember(field.name, current) { mutableStateOf(current) }
     Row(Modifier.fillMaxWidth().padding(vertical = 2.dp), verticalAlignment = Alignment.CenterVertically) {
-        Column(Modifier.width(260.dp)) {
+        Column(Modifier.weight(1f).padding(end = 8.dp)) {
             Text(field.name.substringAfter('.'), style = MaterialTheme.typography.bodyMedium)
             Text(field.doc, style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant, maxLines = 2)
         }
-        OutlinedTextField(text, { text = it }, Modifier.width(190.dp).testTag("setting-${field.name}"), singleLine = true,
-            keyboardOptions = KeyboardOptions(imeAction = ImeAction.Done), keyboardActions = KeyboardActions(onDone = { onWrite(text) }))
-        TextButton(onClick = { onWrite(text) }, enabled = text != current || status is EditStatus.Refused || status is EditStatus.NotConfirmed,
-            modifier = Modifier.testTag("write-${field.name}")) { Text("Write") }
-        Column(Modifier.width(170.dp)) {
-            Text(field.unit.ifEmpty { "-" }, style = MaterialTheme.typography.bodySmall)
-            Text(range(field), style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant)
+        Column(Modifier.width(280.dp)) {
+            if (field is EnumSetting<*>) {
+                // An enumeration is chosen by name, written as it is clicked.
+                Row(horizontalArrangement = Arrangement.spacedBy(6.dp)) {
+                    for (name in field.names) {
+                        FilterChip(name == current, { onWrite(name) }, { Text(name) }, Modifier.testTag("setting-${field.name}-$name"))
+                    }
+                }
+            } else {
+                Row(verticalAlignment = Alignment.CenterVertically) {
+                    OutlinedTextField(text, { text = it }, Modifier.width(210.dp).testTag("setting-${field.name}"), singleLine = true,
+                        keyboardOptions = KeyboardOptions(imeAction = ImeAction.Done), keyboardActions = KeyboardActions(onDone = { onWrite(text) }))
+                    TextButton(onClick = { onWrite(text) }, enabled = text != current || status is EditStatus.Refused || status is EditStatus.NotConfirmed,
+                        modifier = Modifier.testTag("write-${field.name}")) { Text("Write") }
+                }
+            }
+            if (status != null) {
+                Text(describe(status, connection), Modifier.testTag("status-${field.name}"), style = MaterialTheme.typography.bodySmall,
+                    color = when (status) {
+                        is EditStatus.Refused -> MaterialTheme.colorScheme.error
+                        is EditStatus.NotConfirmed -> Color(0xFFE65100)
+                        is EditStatus.Acknowledged -> Color(0xFF2E7D32)
+                        else -> Color.Gray
+                    })
+            }
         }
-        Text(describe(status, connection), Modifier.weight(1f).testTag("status-${field.name}"), style = MaterialTheme.typography.bodySmall,
-            color = when (status) {
-                is EditStatus.Refused -> MaterialTheme.colorScheme.error
-                is EditStatus.NotConfirmed -> Color(0xFFE65100)
-                is EditStatus.Acknowledged -> Color(0xFF2E7D32)
-                else -> Color.Gray
-            })
+        Column(Modifier.width(150.dp).padding(start = 8.dp)) {
+            Text(field.unit.ifEmpty { "-" }, style = MaterialTheme.typography.bodySmall)
+            Text(field.rangeText, Modifier.testTag("range-${field.name}"), style = MaterialTheme.typography.bodySmall,
+                color = MaterialTheme.colorScheme.onSurfaceVariant)
+        }
     }
 }
-
-private fun range(f: SettingField<*>): String = when {
-    f.min != null && f.max != null -> "${trim(f.min!!)} .. ${trim(f.max!!)}"
-    else -> ""
-}
-
-private fun trim(d: Double): String = if (d == Math.rint(d) && kotlin.math.abs(d) < 1e12) d.toLong().toString() else d.toString()
 
 /**
  * An edit's status as the settings view shows it. The robot's refusal and a link that failed before the robot

@@ -2,6 +2,8 @@ package org.pocketbot.desktop.ui
 
 import androidx.compose.foundation.layout.Arrangement
 import androidx.compose.foundation.layout.Column
+import androidx.compose.foundation.layout.ExperimentalLayoutApi
+import androidx.compose.foundation.layout.FlowRow
 import androidx.compose.foundation.layout.Row
 import androidx.compose.foundation.layout.fillMaxHeight
 import androidx.compose.foundation.layout.fillMaxWidth
@@ -14,6 +16,7 @@ import androidx.compose.material3.OutlinedTextField
 import androidx.compose.material3.Text
 import androidx.compose.material3.TextButton
 import androidx.compose.runtime.Composable
+import androidx.compose.runtime.DisposableEffect
 import androidx.compose.runtime.LaunchedEffect
 import androidx.compose.runtime.collectAsState
 import androidx.compose.runtime.getValue
@@ -31,6 +34,9 @@ import org.pocketbot.desktop.model.EditStatus
 import org.pocketbot.desktop.model.RobotModel
 import org.pocketbot.sdk.Controller
 import org.pocketbot.sdk.StepResponse
+import org.pocketbot.sdk.StepSize
+import org.pocketbot.sdk.toDecimalString
+import kotlin.time.Duration.Companion.milliseconds
 
 private val setpointColour = Color(0xFF9E9E9E)
 private val measuredColour = Color(0xFF1565C0)
@@ -40,30 +46,43 @@ private const val LIVE_SPAN_MS = 5000L
 
 /**
  * PID tuning (QGroundControl-style): the chosen controller's setpoint and measured value on a scrolling chart at the
- * fastest rate the link carries, its gains beside it with +/- steps and typed entry, and a step test whose response
- * can be frozen, overlaid with the previous one and exported.
+ * fastest rate the link carries, its gains beside it with +/- steps and typed entry, and a step test (of a size the
+ * user chooses, and asked before the robot moves) whose response can be frozen, overlaid with the previous one and
+ * exported. Each controller shows its own responses. Leaving the view gives the robot its sync mode back.
  */
+@OptIn(ExperimentalLayoutApi::class)
 @Composable
 fun TuningView(robot: RobotModel) {
     val tuning = robot.tuning
     val controller by tuning.controller.collectAsState()
     val active by tuning.active.collectAsState()
     val running by tuning.running.collectAsState()
-    val captured by tuning.captured.collectAsState()
-    val previous by tuning.previous.collectAsState()
-    val frozen by tuning.frozen.collectAsState()
+    val captures by tuning.captures.collectAsState()
+    val mine = captures[controller]
+    val captured = mine?.latest
+    val previous = mine?.reference
+    val frozen = mine?.frozen == true
+    var asking by remember(robot) { mutableStateOf(false) }
+    DisposableEffect(robot) {
+        tuning.enter()
+        onDispose { tuning.leave() }
+    }
     Row(horizontalArrangement = Arrangement.spacedBy(12.dp)) {
         Column(Modifier.weight(1f), verticalArrangement = Arrangement.spacedBy(8.dp)) {
-            Row(horizontalArrangement = Arrangement.spacedBy(6.dp), verticalAlignment = Alignment.CenterVertically) {
-                Text("${robot.name}: PID tuning", style = MaterialTheme.typography.titleLarge, modifier = Modifier.weight(1f))
+            Text("${robot.name}: PID tuning", style = MaterialTheme.typography.titleLarge)
+            // Wraps in a narrow window rather than squeezing the title and pushing the rest out of view.
+            FlowRow(horizontalArrangement = Arrangement.spacedBy(6.dp)) {
                 for (c in Controller.entries) FilterChip(controller == c, { tuning.choose(c) }, { Text(c.title) }, Modifier.testTag("controller-${c.name}"))
             }
             Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
                 if (active) OutlinedButton(onClick = { tuning.stopLater() }, Modifier.testTag("tuning-stop")) { Text("Stop live chart") }
                 else Button(onClick = { tuning.start() }, Modifier.testTag("tuning-start")) { Text("Start live chart") }
-                Button(onClick = { tuning.stepTest() }, enabled = !running, modifier = Modifier.testTag("step-test")) { Text(if (running) "Step test running" else "Step test") }
+                Button(onClick = { asking = true }, enabled = !running && !asking, modifier = Modifier.testTag("step-test")) {
+                    Text(if (running) "Step test running" else "Step test...")
+                }
                 LiveCount(robot)
             }
+            if (asking) StepQuestion(robot, controller, onAnswer = { size -> asking = false; size?.let(tuning::stepTest) })
             LiveChart(robot, controller, Modifier.weight(1f).fillMaxWidth())
             Text("Step response" + (captured?.let { " · ${figures(it)}" } ?: ": run a step test"), Modifier.testTag("step-figures"),
                 style = MaterialTheme.typography.titleSmall)
@@ -81,6 +100,39 @@ fun TuningView(robot: RobotModel) {
             LineChart(captured?.let { stepSeries(it, previous) } ?: emptyList(), "s", Modifier.weight(1f).fillMaxWidth().testTag("step-chart"))
         }
         Gains(robot, controller, Modifier.width(280.dp).fillMaxHeight())
+    }
+}
+
+/**
+ * Before a step test: its size (speed, and distance or duration), what the robot will do at that size, and the user's
+ * go-ahead ([onAnswer] with the size) or cancel ([onAnswer] with null). The robot does not move until then.
+ */
+@Composable
+private fun StepQuestion(robot: RobotModel, controller: Controller, onAnswer: (StepSize?) -> Unit) {
+    val last = robot.tuning.stepSizes.collectAsState().value.getValue(controller)
+    var speed by remember(controller) { mutableStateOf(last.speedMps.toDecimalString()) }
+    var distance by remember(controller) { mutableStateOf(last.distanceM.toDecimalString()) }
+    var seconds by remember(controller) { mutableStateOf((last.duration.inWholeMilliseconds / 1000.0).toDecimalString()) }
+    val moves = controller == Controller.ROBOT_SPEED || controller == Controller.WHEEL_BALANCE
+    // A number that is no number is a NumberFormatException, an IllegalArgumentException as StepSize's own checks are.
+    val (size, problem) = try {
+        StepSize(speed.trim().toDouble(), if (moves) distance.trim().toDouble() else last.distanceM,
+            if (moves) last.duration else (seconds.trim().toDouble() * 1000).toLong().milliseconds) to null
+    } catch (e: IllegalArgumentException) {
+        null to (e.message ?: "not a number")
+    }
+    Panel("Step test: ${controller.title}", Modifier.fillMaxWidth()) {
+        Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
+            OutlinedTextField(speed, { speed = it }, Modifier.width(130.dp).testTag("step-speed"), singleLine = true, label = { Text("speed m/s") })
+            if (moves) OutlinedTextField(distance, { distance = it }, Modifier.width(130.dp).testTag("step-distance"), singleLine = true, label = { Text("distance m") })
+            else OutlinedTextField(seconds, { seconds = it }, Modifier.width(130.dp).testTag("step-seconds"), singleLine = true, label = { Text("duration s") })
+        }
+        Text(size?.let { "${robot.name} ${it.describe(controller)}. Give it room." } ?: problem.orEmpty(), Modifier.testTag("step-describe"),
+            color = if (size == null) MaterialTheme.colorScheme.error else Color.Unspecified, style = MaterialTheme.typography.bodyMedium)
+        Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
+            Button(onClick = { onAnswer(size) }, enabled = size != null, modifier = Modifier.testTag("step-confirm")) { Text("Run the step test") }
+            OutlinedButton(onClick = { onAnswer(null) }, Modifier.testTag("step-cancel")) { Text("Cancel") }
+        }
     }
 }
 
@@ -136,7 +188,7 @@ private fun figures(r: StepResponse): String = listOfNotNull(
     r.riseTimeMs?.let { "rise $it ms" },
     r.overshootPercent?.let { "overshoot %.1f %%".format(it) },
     "rms error %.4f".format(r.rmsError),
-    "gains kp %.4g ki %.4g kd %.4g".format(r.gains[0], r.gains[1], r.gains[2]),
+    "gains kp ${r.gains[0].toFloat().toDecimalString()} ki ${r.gains[1].toFloat().toDecimalString()} kd ${r.gains[2].toFloat().toDecimalString()}",
 ).joinToString(" · ")
 
 /** The controller's gains: typed entry and x1.25 / x0.8 steps, each written to the robot at once. */
@@ -147,7 +199,7 @@ private fun Gains(robot: RobotModel, controller: Controller, modifier: Modifier)
     val gains = controller.gains(robot.robot.settings)
     Panel("Gains: ${controller.title}", modifier) {
         for (field in listOf(gains.kp, gains.ki, gains.kd, gains.iLimit)) {
-            val current = remember(values, field) { field.value.toString() }
+            val current = remember(values, field) { field.valueText }
             var text by remember(field, current) { mutableStateOf(current) }
             val short = field.name.substringAfter('.')
             Row(verticalAlignment = Alignment.CenterVertically) {

@@ -194,7 +194,7 @@ fun WorldView(model: PanelModel) {
             Text("filled: true pose · outline: odometry where it differs · white triangle: front · orange light: track token",
                 style = MaterialTheme.typography.bodySmall)
         }
-        NetworkRow(model, snapshot)
+        NetworkRow(model)
         val measurer = rememberTextMeasurer()
         val labelStyle = MaterialTheme.typography.labelSmall.copy(color = MaterialTheme.colorScheme.onSurface)
         /** The panel's name of an emulated robot, or its id when the panel is not connected to it. */
@@ -227,10 +227,10 @@ fun WorldView(model: PanelModel) {
 
 /**
  * The embedded emulator on the network: a button that serves it, and while served, the address to type into the phone
- * and which robots a host on the network drives now.
+ * and which robots another host (a phone, a script) drives now.
  */
 @Composable
-private fun NetworkRow(model: PanelModel, snapshot: WorldSnapshot) {
+private fun NetworkRow(model: PanelModel) {
     val emulator = model.emulator ?: return
     val serving by emulator.serving.collectAsState()
     Row(horizontalArrangement = Arrangement.spacedBy(8.dp), verticalAlignment = Alignment.CenterVertically) {
@@ -243,9 +243,10 @@ private fun NetworkRow(model: PanelModel, snapshot: WorldSnapshot) {
             OutlinedButton(onClick = { model.stopServingEmulator() }, Modifier.testTag("emu-serve-stop")) { Text("Stop serving") }
             Text("On the network: in the phone app, find the emulator at ${served.addresses.joinToString(" or ")}",
                 style = MaterialTheme.typography.bodyMedium, modifier = Modifier.testTag("emu-serving"))
-            val driven = snapshot.robots.filter { it.drivenFrom != null }
+            val robots by model.robots.collectAsState()
+            val driven = robots.map { it to it.driving.collectAsState().value }.filter { (_, d) -> !d.byThisHost && d.driver != null }
             if (driven.isNotEmpty()) {
-                Text(driven.joinToString(" · ") { "robot ${it.id} driven from ${it.drivenFrom}" },
+                Text(driven.joinToString(" · ") { (r, d) -> "${r.name} driven by ${d.driver}" },
                     style = MaterialTheme.typography.bodyMedium, color = MaterialTheme.colorScheme.primary,
                     modifier = Modifier.testTag("emu-driven"))
             }

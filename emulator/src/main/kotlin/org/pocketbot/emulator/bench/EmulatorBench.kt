@@ -10,7 +10,11 @@ import org.pocketbot.emulator.world.Tape
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
 import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.HelloRequest
+import org.pocketbot.protocol.HostRole
 import org.pocketbot.protocol.LineFollow
+import org.pocketbot.protocol.ProtocolInfo
+import org.pocketbot.protocol.SetRole
 import org.pocketbot.protocol.Slip
 import kotlin.math.abs
 import kotlin.math.ceil
@@ -148,8 +152,11 @@ private fun run(image: FirmwareImage, n: Int, measureS: Int? = null, warmS: Int?
         ?.let { EmulatorConfig(seed = 42, firmware = image, threads = it) } ?: EmulatorConfig(seed = 42, firmware = image)
     Emulator(world, config).use { emu ->
         val emptyHeap = liveHeap()
-        val start = LineFollow(1, 0, 0f)
-        val frame = Slip.encode(Frames.encode(start, 1)) // acknowledged commands carry a non-zero sequence number
+        // A host that drives each robot (hello_request, set_role) and starts its line following; acknowledged commands
+        // carry non-zero sequence numbers.
+        val frame = Slip.encode(Frames.encode(HelloRequest(ProtocolInfo.VERSION, 0xBE4C), 1)) +
+            Slip.encode(Frames.encode(SetRole(HostRole.DRIVE.code, "bench"), 2)) +
+            Slip.encode(Frames.encode(LineFollow(1, 0, 0f), 3))
         for (i in 0 until n) {
             val k = i / 3
             val s = round.starts[i % 3]

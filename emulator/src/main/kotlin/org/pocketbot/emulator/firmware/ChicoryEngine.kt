@@ -31,6 +31,8 @@ internal class ChicoryEngine(image: FirmwareImage) {
     val uartTxTake: ExportFunction
     val irRx: ExportFunction
     val runEvents: ExportFunction
+    /** Null in a firmware that serves one host link only (the UART). */
+    val linkTxTake: ExportFunction?
 
     init {
         // The firmware imports nothing (sim_abi.h): sensor readings and IR messages are data in its memory.
@@ -52,6 +54,7 @@ internal class ChicoryEngine(image: FirmwareImage) {
         uartTxTake = instance.export("sim_uart_tx_take")
         irRx = instance.export("sim_ir_rx")
         runEvents = instance.export("sim_run_events")
+        linkTxTake = exportOrNull("sim_link_tx_take")
     }
 
     /** The state of a fresh instance (before any call): memory and mutable globals (low and high words). */
@@ -131,6 +134,9 @@ internal class ChicoryFirmware(private val image: FirmwareImage) : FirmwareInsta
     override fun runEvents(count: Int, endTicks: Long) { call { it.runEvents.apply(count.toLong(), endTicks) } }
 
     override fun uartTxTake(max: Int): Int = call { it.uartTxTake.apply(max.toLong())[0].toInt() }
+
+    override fun linkTxTake(link: Int, max: Int): Int =
+        if (link == 0) uartTxTake(max) else call { it.linkTxTake?.apply(link.toLong(), max.toLong())?.get(0)?.toInt() ?: 0 }
 
     override fun irRx(side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
         call { it.irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong()) }

@@ -43,7 +43,8 @@ internal sealed class FirmwareInstance(
     /** The instance's linear memory. */
     val memory: FirmwareMemory,
 ) {
-    /** Calls export [name] of sim_abi.h that returns an address in [memory]; null when the firmware lacks it. */
+    /** Calls export [name] of sim_abi.h that takes nothing and returns an int (an address in [memory], or sim_links);
+     *  null when the firmware lacks it. */
     protected abstract fun address(name: String): Int?
 
     abstract fun init(robotId: Int)
@@ -59,6 +60,9 @@ internal sealed class FirmwareInstance(
 
     /** Takes up to [max] bytes queued for the host; they are at [txBufferAddress]. */
     abstract fun uartTxTake(max: Int): Int
+
+    /** As [uartTxTake], for host link [link] (0: the UART). */
+    abstract fun linkTxTake(link: Int, max: Int): Int
 
     abstract fun irRx(side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int)
 
@@ -83,7 +87,11 @@ internal sealed class FirmwareInstance(
     /** Address of the EEPROM (sim_eeprom), or -1 for a firmware without one (the stand-in). */
     var eepromAddress: Int = -1; private set
 
-    /** Asks the firmware where its buffers are: the last step of a subclass's construction. */
+    /** How many host links the firmware serves at once (sim_links; 1, the UART, for a firmware without it). */
+    var linkCount: Int = 1; private set
+
+    /** Asks the firmware where its buffers are and how many host links it serves: the last step of a subclass's
+     *  construction. */
     protected fun findAddresses() {
         fun required(name: String): Int = address(name) ?: throw IllegalStateException("the firmware does not export $name")
         eventsAddress = required("sim_events")
@@ -94,6 +102,7 @@ internal sealed class FirmwareInstance(
         settingsAddress = required("sim_settings")
         txBufferAddress = required("sim_uart_tx_buffer")
         eepromAddress = address("sim_eeprom") ?: -1
+        linkCount = address("sim_links") ?: 1
     }
 
     /** A copy of the EEPROM, or null when the firmware has none. */
@@ -107,7 +116,8 @@ internal sealed class FirmwareInstance(
 
     /**
      * Puts event [index] (0 until [EVENT_CAPACITY]) in the buffer for [runEvents]: at [ticks], a byte received
-     * ([EVENT_UART_RX], [arg] the byte) or an encoder edge ([EVENT_ENCODER_EDGE], [arg] the wheel).
+     * ([EVENT_UART_RX], [arg] the byte; [EVENT_LINK_RX] on another link), an encoder edge ([EVENT_ENCODER_EDGE], [arg]
+     * the wheel), or a host link opened or closed ([EVENT_LINK_OPEN], [EVENT_LINK_CLOSE], [arg] the link).
      */
     fun putEvent(index: Int, ticks: Long, kind: Int, arg: Int) {
         val at = eventsAddress + index * EVENT_BYTES
@@ -171,6 +181,11 @@ internal sealed class FirmwareInstance(
         const val EVENT_CAPACITY: Int = 64
         const val EVENT_UART_RX: Int = 0
         const val EVENT_ENCODER_EDGE: Int = 1
+        /** A byte on a host link: the argument is `link shl 8 or byte`. */
+        const val EVENT_LINK_RX: Int = 2
+        /** A host came on link `arg`, or left it. */
+        const val EVENT_LINK_OPEN: Int = 3
+        const val EVENT_LINK_CLOSE: Int = 4
         private const val EVENT_BYTES = 16
         /** sim_ir_msg_t's fields, in order; SIM_IR_OUT_CAPACITY. */
         const val IR_SENDER: Int = 0

@@ -94,7 +94,7 @@ internal object NativeEngine {
     /** The instance's linear memory, valid until [free]. */
     @JvmStatic external fun memory(handle: Long): ByteBuffer
 
-    /** What an address export (one of the ADDRESS_ numbers) returns. */
+    /** What export [ADDRESSES]`[which]` returns (an address, or sim_links). */
     @JvmStatic external fun address(handle: Long, which: Int): Int
 
     @JvmStatic external fun init(handle: Long, robotId: Int)
@@ -103,11 +103,14 @@ internal object NativeEngine {
     @JvmStatic external fun uartRx(handle: Long, byte: Int)
     @JvmStatic external fun runEvents(handle: Long, count: Int, endTicks: Long)
     @JvmStatic external fun uartTxTake(handle: Long, max: Int): Int
+    @JvmStatic external fun linkTxTake(handle: Long, link: Int, max: Int): Int
     @JvmStatic external fun irRx(handle: Long, side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int)
 
-    /** The address exports, numbered as engine.c's `address` switch. */
+    /** The exports that take nothing and return an int (the addresses, sim_links), numbered as engine.c's `address`
+     *  switch. */
     val ADDRESSES = listOf(
         "sim_events", "sim_inputs", "sim_ir_out", "sim_outputs", "sim_state", "sim_settings", "sim_uart_tx_buffer", "sim_eeprom",
+        "sim_links",
     )
 }
 
@@ -162,6 +165,9 @@ internal class NativeFirmware private constructor(private var handle: Long) : Fi
 
     override fun uartTxTake(max: Int): Int =
         NativeEngine.uartTxTake(open(), max).also { Reference.reachabilityFence(this) }
+
+    override fun linkTxTake(link: Int, max: Int): Int =
+        NativeEngine.linkTxTake(open(), link, max).also { Reference.reachabilityFence(this) }
 
     override fun irRx(side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
         NativeEngine.irRx(open(), side, senderId, senderLed, power, len, payloadLo, payloadHi)

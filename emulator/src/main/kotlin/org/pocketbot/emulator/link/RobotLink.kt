@@ -11,15 +11,17 @@ internal fun interface ByteSink {
 
 /** A host-side connection to a robot's link: gets the robot's bytes, and is told when the link drops it. */
 internal interface LinkConnection : ByteSink {
-    /** The link went down or another host took the robot over; the connection must close. */
+    /** The link went down (out of range, the emulator closed); the connection must close. */
     public fun onLinkLost(reason: String)
 }
 
 /**
- * The byte pipe between a robot's UART and its host, with the [LinkSettings] model. Host threads call
- * [hostSend], [attach], [detach]; the emulator's stepping thread does the rest.
+ * The byte pipe between one of a robot's host links (link [index]; 0 is its UART) and the host on it, with the
+ * [LinkSettings] model. Host threads call [hostSend], [attach] (through [RobotLinks]), [detach]; the emulator's
+ * stepping thread does the rest, and tells the firmware when a host came ([takeOpen]) and when one left, once every
+ * byte it sent has reached the robot ([takeClose]).
  */
-internal class RobotLink(private val rng: SplittableRandom) {
+internal class RobotLink(val index: Int, private val rng: SplittableRandom) {
     @Volatile public var settings: LinkSettings = LinkSettings()
         internal set
 
@@ -48,22 +50,50 @@ internal class RobotLink(private val rng: SplittableRandom) {
     private val hostBytesCrc = java.util.zip.CRC32()
     public val bytesToHostCrc: Long get() = synchronized(hostBytesCrc) { hostBytesCrc.value }
 
-    /** Connects a host; a robot link carries one host at a time, so an earlier one is told it lost the link. */
-    public fun attach(c: LinkConnection) {
-        if (!settings.connected) throw IllegalStateException("link is down")
-        val old = synchronized(this) { connection.also { connection = c } }
-        old?.onLinkLost("another host connected")
+    // What the firmware is to be told at the next step: a host came (open), a host left (close, once its bytes are in).
+    @Volatile private var opening = false
+    @Volatile private var closing = false
+
+    /** Connects [c] if no host is on this link, nor one that left with bytes still on their way; false otherwise. */
+    internal fun tryAttach(c: LinkConnection): Boolean = synchronized(this) {
+        if (connection != null || !drained) return false
+        connection = c
+        closing = false
+        opening = true
+        true
     }
 
     public fun detach(c: LinkConnection) {
-        synchronized(this) { if (connection === c) connection = null }
+        synchronized(this) {
+            if (connection !== c) return
+            connection = null
+            closing = true
+        }
     }
 
     public val isAttached: Boolean get() = connection != null
 
+    /** Nothing from the host is left on the way to the robot. */
+    private val drained: Boolean get() = queuedFromHost.get() == 0 && inFlightToRobot == 0
+
+    /** True once: a host came since the firmware was last told. */
+    internal fun takeOpen(): Boolean = opening.also { if (it) opening = false }
+
+    /** True once: the host left and everything it sent has reached the robot. */
+    internal fun takeClose(): Boolean = synchronized(this) { (closing && connection == null && drained).also { if (it) closing = false } }
+
+    /** The firmware has yet to be told that a host came or left. */
+    internal val pending: Boolean get() = opening || closing
+
+    /** Bytes from no connection (a test's, a bench's): the firmware is told a host came if none is on the link. */
+    internal fun rawSend(bytes: ByteArray) {
+        if (connection == null) opening = true
+        hostSend(bytes)
+    }
+
     /** Tells the connected host, if any, that the link is gone (the emulator closes). */
     internal fun dropConnection(reason: String) {
-        val old = synchronized(this) { connection.also { connection = null } }
+        val old = synchronized(this) { connection.also { if (it != null) { connection = null; closing = true } } }
         old?.onLinkLost(reason)
     }
 
@@ -91,9 +121,8 @@ internal class RobotLink(private val rng: SplittableRandom) {
         val wasUp = settings.connected
         settings = s
         if (wasUp && !s.connected) {
-            val old = synchronized(this) { connection.also { connection = null } }
-            old?.onLinkLost("link disconnected")
             while (true) { val chunk = fromHost.poll() ?: break; queuedFromHost.addAndGet(-chunk.size) }
+            dropConnection("link disconnected")
         }
     }
 

@@ -6,6 +6,7 @@ import kotlinx.coroutines.flow.Flow
 import kotlinx.coroutines.flow.flow
 import org.pocketbot.emulator.link.LinkConnection
 import org.pocketbot.emulator.link.RobotLink
+import org.pocketbot.emulator.link.RobotLinks
 import org.pocketbot.protocol.Slip
 import org.pocketbot.protocol.SlipDecoder
 import org.pocketbot.sdk.transport.Discoverer
@@ -15,31 +16,29 @@ import org.pocketbot.sdk.transport.Transport
 import org.pocketbot.sdk.transport.TransportLostException
 
 /**
- * A [Transport] to a robot of an emulator running in this JVM: frames are SLIP-encoded into the robot's
- * simulated serial link (baud rate, latency, faults) and decoded out of it, exactly as over TCP or Bluetooth,
- * without sockets. Opening a robot that already has a host takes it over (the older transport is lost).
+ * A [Transport] to a robot of an emulator running in this JVM: frames are SLIP-encoded into a simulated serial link
+ * of the robot's own (baud rate, latency, faults) and decoded out of it, exactly as over TCP or Bluetooth, without
+ * sockets. Each transport is a host of its own on the robot, on a link of its own; with every link in use it is
+ * refused ([TransportLostException] from the constructor).
  */
 internal class InProcessTransport(
-    private val link: RobotLink,
+    links: RobotLinks,
     override val address: String,
 ) : Transport, LinkConnection {
     private val frames = Channel<ByteArray>(Channel.UNLIMITED)
     private val decoder = SlipDecoder()
     @Volatile private var closed = false
+    private val link: RobotLink = try {
+        links.attach(this)
+    } catch (e: IllegalStateException) { // the link is down, or every link carries a host
+        throw TransportLostException("$address: ${e.message}", e)
+    }
 
     /** SLIP frames the decoder dropped (corrupted framing) on the way from the robot. */
     @Volatile public var framingErrors: Int = 0
         private set
 
     override val incoming: ReceiveChannel<ByteArray> get() = frames
-
-    init {
-        try {
-            link.attach(this)
-        } catch (e: IllegalStateException) {
-            throw TransportLostException("$address: ${e.message}", e)
-        }
-    }
 
     override suspend fun send(frame: ByteArray) {
         if (closed) throw TransportLostException("$address: transport is closed")
@@ -73,12 +72,12 @@ internal class InProcessTransport(
 internal class InProcessDevice(
     override val name: String,
     override val address: String,
-    private val link: RobotLink,
+    private val links: RobotLinks,
 ) : RobotDevice {
-    override suspend fun open(): Transport = InProcessTransport(link, address)
+    override suspend fun open(): Transport = InProcessTransport(links, address)
 
     /** The simulated link's baud rate as it is set now ([org.pocketbot.emulator.RobotHandle.link]). */
-    override val linkRate: LinkRate get() = LinkRate.ofBaud(link.settings.baud)
+    override val linkRate: LinkRate get() = LinkRate.ofBaud(links.settings.baud)
 
     override fun toString(): String = "$name ($address)"
 }

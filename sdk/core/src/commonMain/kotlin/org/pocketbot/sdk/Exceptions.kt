@@ -36,11 +36,28 @@ public open class CommandRefusedException internal constructor(
     public val command: String,
     public val code: ErrorCode,
     public val detail: Int,
-    message: String = "robot refused $command: ${code.name.lowercase()} (detail $detail)",
+    message: String = "robot refused ${command.replace('_', ' ')}: ${describe(code, detail)}",
 ) : RobotException(message) {
     internal constructor(packetType: Int, rawCode: Int, detail: Int) :
         this(commandName(packetType), errorCodeOf(rawCode), detail)
 }
+
+/**
+ * A command that changes the robot, on a robot this host does not drive: another host drives it ([driver], its label,
+ * when known) or none does. Thrown at once, without sending, when this host knows it watches; also when the robot
+ * refuses the command because the drive changed meanwhile. Take the drive with [Robot.takeOver] (or ask for it with
+ * [Robot.setRole]); [Robot.driving] says who drives.
+ */
+public class NotDriverException internal constructor(
+    /** The robot's name. */
+    public val robot: String,
+    command: String,
+    /** The label of the host that drives the robot, or null when no host drives it (or this host does not know). */
+    public val driver: String?,
+) : CommandRefusedException(
+    command, ErrorCode.NOT_DRIVER, 0,
+    if (driver != null) "$robot is driven by $driver" else "$robot is not driven by this host",
+)
 
 /** The robot refused to write the setting [name] to [value]: outside its min..max, or not a whole field. */
 public class SettingRefusedException internal constructor(
@@ -50,10 +67,14 @@ public class SettingRefusedException internal constructor(
     public val value: Any?,
     code: ErrorCode,
     detail: Int,
+    /** [value] as people read it ([SettingField.format]). */
+    valueText: String = value.toString(),
+    /** What the robot accepts, as people read it ([SettingField.rangeText]); empty when unbounded. */
+    range: String = "",
 ) : CommandRefusedException(
     "update_settings", code, detail,
-    "robot refused setting $name = $value: ${code.name.lowercase()}" +
-        if (code == ErrorCode.SETTINGS_VALUE) " (outside the range the robot accepts)" else " (detail $detail)",
+    "robot refused $name = $valueText: " +
+        if (code == ErrorCode.SETTINGS_VALUE) "outside the range it accepts" + (if (range.isEmpty()) "" else " ($range)") else describe(code, detail),
 )
 
 /** A command was sent [attempts] times on a live link and never acknowledged. */
@@ -85,3 +106,17 @@ public class ConnectFailedException internal constructor(message: String, cause:
 internal fun commandName(packetType: Int): String = PACKET_SPECS[packetType]?.name ?: "packet 0x${packetType.toString(16)}"
 
 internal fun errorCodeOf(raw: Int): ErrorCode = ErrorCode.fromCode(raw)
+
+/** What the robot objected to, in words (the protocol's names of [ErrorCode] are for programs). */
+internal fun describe(code: ErrorCode, detail: Int): String = when (code) {
+    ErrorCode.SETTINGS_RANGE -> "not a whole setting (offset $detail)"
+    ErrorCode.SETTINGS_VALUE -> "a value outside the range it accepts"
+    ErrorCode.QUEUE_FULL -> "its movement queue is full"
+    ErrorCode.BAD_ARGUMENT -> "an argument it does not accept (at byte $detail of the command)"
+    ErrorCode.BUSY -> "it is busy with something that cannot wait"
+    ErrorCode.BAD_SEQUENCE -> "a command out of sequence"
+    ErrorCode.BAD_LENGTH, ErrorCode.TOO_SHORT, ErrorCode.TOO_LONG -> "a command of the wrong length"
+    ErrorCode.BAD_CRC, ErrorCode.FRAMING -> "a damaged frame"
+    ErrorCode.UNKNOWN_TYPE -> "a command it does not know"
+    else -> "error code ${code.code} (detail $detail)"
+}

@@ -15,12 +15,16 @@ import org.pocketbot.protocol.MovementLog
 import org.pocketbot.protocol.MovementOutcome as WireOutcome
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.ReadMovements
+import org.pocketbot.protocol.Settings
+import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.Stop
 import org.pocketbot.protocol.WheelSpeeds
 import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.link.CommandWithdrawnException
 import org.pocketbot.sdk.internal.link.LinkPort
+import kotlin.math.PI
+import kotlin.math.round
 import kotlin.random.Random
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -45,6 +49,9 @@ public class MovementHandle internal constructor(
 
     /** The robot no longer held it at the last look: declared lost unless its log shows it at the next. */
     internal var missing = false
+
+    /** How much of it this host saw done (from the encoders while the robot reported it running), or null. */
+    internal var seenDone: Double? = null
 
     /** True once it ended. */
     public val isDone: Boolean get() = result.isCompleted
@@ -83,7 +90,12 @@ public class MovementHandle internal constructor(
  * [mode] says [LocoMode.FAILSAFE] until the next command. A shorter outage changes nothing: the movement goes on
  * and finishes once. Change the timeout with `robot.settings.link.failsafeTimeoutMs.set(ms)`.
  */
-public class Locomotion internal constructor(private val link: LinkPort, random: Random) {
+public class Locomotion internal constructor(
+    private val link: LinkPort,
+    random: Random,
+    /** The robot's settings as the host knows them (geometry, for what this host sees a movement do). */
+    private val settings: () -> Settings,
+) {
     private val _state = MutableStateFlow(EMPTY_STATE.locomotion)
     private val _queue = MutableStateFlow<List<MovementHandle>>(emptyList())
     private val outstanding = ArrayList<MovementHandle>()
@@ -93,6 +105,14 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
     private var heldIds: Set<Int> = emptySet()
     private var logCheck: kotlinx.coroutines.Job? = null
     private var idleSinceMs = -1L
+
+    // The running movement as this host watches it: its handle, and the encoder counts when it was first seen running.
+    private var running: MovementHandle? = null
+    private var startLeft = 0
+    private var startRight = 0
+    private var lastLeft = 0
+    private var lastRight = 0
+    private var lastTimeMs = -1L
 
     /** Mode, queue length, current and last finished movement id, as the robot reported them (full state only). */
     public val state: StateFlow<StateLocomotion> = _state.asStateFlow()
@@ -195,8 +215,33 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
         logWaiter?.complete(log) ?: settle(log, resumed = true)
     }
 
+    /**
+     * Every state update: what the running movement did so far, as this host sees it in the encoder counts (kept for
+     * when the robot cannot tell any more: a restart).
+     */
+    internal fun watch(encoders: StateEncoders, timeMs: Long) {
+        if (lastTimeMs >= 0 && timeMs < lastTimeMs) running = null // the robot restarted: its counts begin again
+        lastTimeMs = timeMs
+        lastLeft = encoders.left
+        lastRight = encoders.right
+        val h = running ?: return
+        val s = settings()
+        val metresPerPulse = PI * s.geometry.wheelDiameterM / s.encoder.pulsesPerRev
+        val left = (lastLeft - startLeft) * metresPerPulse
+        val right = (lastRight - startRight) * metresPerPulse
+        h.seenDone = when (h.movement) {
+            is Movement.Straight -> (left + right) / 2
+            is Movement.Rotate, is Movement.Arc -> (right - left) / s.geometry.wheelBaseM * 180 / PI
+        }
+    }
+
     internal fun update(s: StateLocomotion, timeMs: Long) {
         _state.value = s
+        if (running?.id != s.currentId) {
+            running = outstanding.firstOrNull { it.id == s.currentId }
+            startLeft = lastLeft
+            startRight = lastRight
+        }
         // A robot that stands idle while movements are open lost their reports: its log knows.
         val idle = s.queueLength == 0 && s.currentId == 0
         if (!idle || outstanding.none { it.acked }) {
@@ -210,8 +255,11 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
         }
     }
 
-    /** After a reconnect or a robot reset: ends every handle the robot no longer holds, with what its log says. */
-    internal suspend fun reconcile(exchange: suspend (Packet) -> Unit, resumed: Boolean) {
+    /**
+     * After a reconnect or a robot reset: ends every handle the robot no longer holds, with what its log says. A robot
+     * that [restarted] knows nothing of the movements before: they end at once as lost, with what this host saw.
+     */
+    internal suspend fun reconcile(exchange: suspend (Packet) -> Unit, resumed: Boolean, restarted: Boolean) {
         val waiter = CompletableDeferred<MovementLog>()
         logWaiter = waiter
         try {
@@ -222,7 +270,7 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
         // The log comes before the ack on the same ordered link.
         @OptIn(kotlinx.coroutines.ExperimentalCoroutinesApi::class)
         val log = if (waiter.isCompleted) waiter.getCompleted() else null
-        settle(log ?: throw RobotException("the robot acknowledged read_movements without its log"), resumed)
+        settle(log ?: throw RobotException("the robot acknowledged read_movements without its log"), resumed, restarted)
     }
 
     internal fun robotHolds(packet: Packet): Boolean = when (packet) {
@@ -232,7 +280,7 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
         else -> false
     }
 
-    private fun settle(log: MovementLog, resumed: Boolean) {
+    private fun settle(log: MovementLog, resumed: Boolean, restarted: Boolean = false) {
         val entries = HashMap<Int, Pair<MovementOutcome, Float>>()
         for (i in 0 until log.count.coerceIn(0, log.ids.size)) entries[log.ids[i]] = outcomeOf(log.outcomes[i]) to log.done[i]
         for (h in outstanding.toList()) {
@@ -249,9 +297,10 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
                 h in held -> h.missing = false
                 h.uncertain -> end(h, MovementOutcome.DROPPED, 0.0, "withdrawn by a stop; it never reached the robot")
                 !h.acked -> {} // its command is still on its way and goes out again after the reconnect
+                restarted -> end(h, MovementOutcome.LOST, h.seenDone, lostDetail(h, "the robot restarted"))
                 h.missing -> end(
-                    h, MovementOutcome.LOST, null,
-                    if (resumed) "the robot has no record of it" else "the robot has no record of it: it was reset or served another host",
+                    h, MovementOutcome.LOST, h.seenDone,
+                    lostDetail(h, if (resumed) "the robot has no record of it" else "the robot has no record of it: it was reset or served another host"),
                 )
                 else -> {
                     h.missing = true
@@ -281,8 +330,12 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
     private fun end(h: MovementHandle, outcome: MovementOutcome, done: Double?, detail: String) {
         if (!h.result.complete(MovementResult(h.movement, outcome, done, detail))) return
         outstanding.remove(h)
+        if (running === h) running = null
         publish()
     }
+
+    private fun lostDetail(h: MovementHandle, why: String): String =
+        h.seenDone?.let { "$why; this host saw it do ${round3(it)} ${h.movement.unit} before it lost track" } ?: why
 
     private fun publish() {
         _queue.value = outstanding.toList()
@@ -302,9 +355,11 @@ public class Locomotion internal constructor(private val link: LinkPort, random:
 
         fun modeOf(s: StateLocomotion): LocoMode = s.mode
 
+        fun round3(v: Double): Double = round(v * 1000) / 1000
+
         fun describe(o: MovementOutcome): String = when (o) {
             MovementOutcome.FINISHED -> "finished"
-            MovementOutcome.STOPPED -> "stopped by a command of this host"
+            MovementOutcome.STOPPED -> "stopped by a host's command"
             MovementOutcome.FAILSAFE -> "cut by the robot's link failsafe: no packet from the host for link.failsafe_timeout_ms"
             MovementOutcome.DROPPED -> "cleared from the queue before it started"
             MovementOutcome.LOST -> "the robot has no record of it"

@@ -82,7 +82,7 @@ public enum class MovementOutcome {
     /** It ran to its end. */
     FINISHED,
 
-    /** A command of this host ([Locomotion.stop], teleoperation, line following) ended it while it ran. */
+    /** A host's command ([Locomotion.stop], from this host or one that watches; teleoperation, line following) ended it while it ran. */
     STOPPED,
 
     /**
@@ -94,7 +94,10 @@ public enum class MovementOutcome {
     /** It never started: a stop (or teleoperation, line following) cleared it from the queue, or withdrew it before it was sent. */
     DROPPED,
 
-    /** The robot no longer holds it and has no record of how it ended: it was reset, or another host cleared its log. */
+    /**
+     * The robot no longer holds it and has no record of how it ended: it restarted (see [RobotEvent.Restarted]), or
+     * its log no longer goes back that far. [MovementResult.done] is what this host saw it do, when it saw it run.
+     */
     LOST,
 }
 
@@ -103,7 +106,8 @@ public enum class MovementOutcome {
  *
  * @property outcome what ended it.
  * @property done how much of it was done, in the unit of the movement's main quantity ([Movement.unit], signed like
- *   [Movement.amount]), measured by the robot's encoders once it stood still; null when nobody knows ([MovementOutcome.LOST]).
+ *   [Movement.amount]), measured by the robot's encoders once it stood still; for [MovementOutcome.LOST], what this
+ *   host saw of it in the encoder counts the robot reported (at least that much), or null when it never saw it run.
  * @property detail a sentence for people: what happened.
  */
 public class MovementResult internal constructor(

@@ -16,6 +16,7 @@ import kotlinx.coroutines.flow.asSharedFlow
 import kotlinx.coroutines.flow.asStateFlow
 import kotlinx.coroutines.withContext
 import org.pocketbot.protocol.DebugText
+import org.pocketbot.protocol.Driver
 import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.IrReceived
 import org.pocketbot.protocol.MovementDone
@@ -74,6 +75,11 @@ public suspend fun RobotDevice.connect(scope: CoroutineScope, options: RobotOpti
  * functions suspend until the robot acknowledged; they survive link losses (the SDK reconnects and retransmits
  * with the same sequence number, so nothing is executed twice). While the link is down the robot's own failsafe
  * may stop it: see [Locomotion] for what that does to queued movements.
+ *
+ * Several hosts may be connected to one robot; one drives it and the others watch ([driving], [RobotOptions.role]):
+ * commands that change the robot fail at once with [NotDriverException] on a host that watches, which may take the
+ * robot over ([takeOver]). [events] tells when the drive changes hands and when the robot restarted. [disconnect]
+ * says goodbye, so that the robot finishes what this host queued instead of taking it for a lost link.
  */
 public class Robot internal constructor(
     /** The device this robot was connected through; reconnects open it again. */
@@ -158,6 +164,25 @@ public class Robot internal constructor(
     /** Who the robot is, from its last `hello`. */
     public val identity: RobotIdentity get() = link.identity.value ?: error("robot not connected yet")
 
+    /** Who drives the robot, as it last told this host: this host, another one (by its label), or none. */
+    public val driving: StateFlow<Driving> get() = link.driving
+
+    /**
+     * What happened to the robot that its user should hear of: the drive changed hands ([RobotEvent.DriverChanged],
+     * also when another host took it from this one), the robot restarted ([RobotEvent.Restarted]). Buffers 256 events
+     * for each collector, then drops the oldest; replays nothing.
+     */
+    public val events: SharedFlow<RobotEvent> get() = link.events
+
+    /**
+     * Asks the robot for [role] (drive if free, watch, or take over) and suspends until it answered; returns who drives
+     * then. The role counts for later reconnects too (a take-over as [Role.DRIVE]).
+     */
+    public suspend fun setRole(role: Role): Driving = link.requestRole(role)
+
+    /** Takes the robot from the host that drives it (which is told); returns who drives then: this host. */
+    public suspend fun takeOver(): Driving = setRole(Role.TAKE_OVER)
+
     /** State reflection: sync mode and period. */
     public val reflector: StateReflector = StateReflector(link, mirror)
 
@@ -165,7 +190,7 @@ public class Robot internal constructor(
     public val settings: RobotSettings = RobotSettings(link, mirror)
 
     /** Movement queue (straight, rotate, arc), stop, and teleoperation. */
-    public val locomotion: Locomotion = Locomotion(link, link.random)
+    public val locomotion: Locomotion = Locomotion(link, link.random) { mirror.values.value }
 
     /** The eight-spot line sensor. */
     public val lineSensor: LineSensor = LineSensor()
@@ -194,8 +219,25 @@ public class Robot internal constructor(
     /** The track behaviour of thesis A.3, run by the robot's firmware: start, stop, reverse, speed, token. */
     public val track: TrackBehaviour = TrackBehaviour(link, settings)
 
+    private val freshnessWatch = FreshnessWatch(link, reflector)
+
+    /**
+     * How current [state] is: live, or stale and why (the link is down, the sync mode does not carry the values, the
+     * robot went quiet) and since when, for the values of full states ([StateFreshness.full]) and those reduced states
+     * carry too ([StateFreshness.reduced]). It changes when that changes, not with every state. A face greys what is
+     * not live and shows its age:
+     *
+     * ```
+     * val f = robot.freshness.value.full
+     * val battery = "%.2f V".format(robot.state.value.power.batteryMv / 1000.0) +
+     *     if (f.isLive) "" else " (${f.age()?.inWholeSeconds} s ago)"
+     * ```
+     */
+    public val freshness: StateFlow<StateFreshness> get() = freshnessWatch.freshness
+
     init {
         link.client = Client()
+        freshnessWatch.start(link.connection)
     }
 
     /** What the link hands over, on its serial context: the path frame -> packet -> state -> flow ends here. */
@@ -215,10 +257,16 @@ public class Robot internal constructor(
             }
         }
 
-        override suspend fun restore(hello: Hello, firstSession: Boolean, exchange: suspend (Packet) -> Unit) {
+        override suspend fun restore(hello: Hello, firstSession: Boolean, driver: Driver, exchange: suspend (Packet) -> Unit) {
+            val seenMs = _state.value.time.timeMs
+            val restarted = !firstSession && firstFullState.isCompleted && driver.timeMs < seenMs
+            if (restarted) {
+                debugLog.host(1, "${hello.name} restarted: its clock went back from ${seconds(seenMs)} to ${seconds(driver.timeMs)}")
+                link.emit(RobotEvent.Restarted(seenMs, driver.timeMs))
+            }
             mirror.align(hello, identity.address, exchange)
-            if (!firstSession) locomotion.reconcile(exchange, resumed = hello.sessionResumed != 0)
-            reflector.restore(exchange)
+            if (!firstSession) locomotion.reconcile(exchange, resumed = hello.sessionResumed != 0, restarted = restarted)
+            if (link.driving.value.byThisHost) reflector.restore(exchange) else reflector.adoptRobots()
         }
 
         override fun onFrameDropped() = locomotion.reportMayBeLost()
@@ -237,9 +285,11 @@ public class Robot internal constructor(
 
     private fun applyState(state: RobotState, kind: StateUpdate.Kind) {
         _state.value = state
+        freshnessWatch.heard(kind == StateUpdate.Kind.FULL, state.time.timeMs)
         lineSensor.update(state.line)
         motors.update(state.wheels)
         odometry.update(state.encoders, state.time.timeMs)
+        locomotion.watch(state.encoders, state.time.timeMs)
         if (kind == StateUpdate.Kind.FULL) {
             firstFullState.complete(Unit)
             locomotion.update(state.locomotion, state.time.timeMs)
@@ -254,20 +304,37 @@ public class Robot internal constructor(
     }
 
     /**
-     * Closes the link and suspends until every coroutine the robot started has ended. Commands still waiting fail
-     * with [RobotClosedException]. Idempotent.
+     * Says goodbye, closes the link and suspends until every coroutine the robot started has ended. The robot finishes
+     * the movements this host queued (see [disconnect] with a [QueueOnLeave]). Commands still waiting fail with
+     * [RobotClosedException]. Idempotent.
      */
     public suspend fun disconnect() {
-        close()
+        disconnect(QueueOnLeave.FINISH)
+    }
+
+    /**
+     * Says goodbye (`goodbye`): the robot finishes or drops the movements this host queued, as [queue] says, stops
+     * teleoperation, and no longer takes this host's link for a lost one (so its failsafe does not cut what it
+     * finishes; it still stops what a host that vanishes without a goodbye drove). Then closes the link and suspends
+     * until every coroutine the robot started has ended. Returns true when the robot acknowledged the goodbye; false
+     * when the link was down or it did not answer (then its failsafe stops what this host drove). A watcher's goodbye
+     * changes nothing on the robot. Idempotent: a robot closed already returns false.
+     */
+    public suspend fun disconnect(queue: QueueOnLeave): Boolean {
+        val said = if (link.isClosing) false else link.leave(queue)
+        link.close(null)
         withContext(kotlinx.coroutines.NonCancellable) { job.join() }
+        return said
     }
 
     /**
      * Closes the link and ends the robot's coroutines without waiting for them (for `use {}`); idempotent, safe to
-     * call from any thread. Commands still waiting fail with [RobotClosedException].
+     * call from any thread. A live link first carries a goodbye (the robot finishes this host's movements), sent
+     * without waiting for the robot's answer: [disconnect] waits for it. Commands still waiting fail with
+     * [RobotClosedException].
      */
     override fun close() {
-        link.close(null)
+        link.close(null, goodbye = true)
     }
 
     override fun toString(): String = "Robot(${link.identity.value?.name ?: device.name} at ${device.address}, ${connection.value})"
@@ -288,3 +355,5 @@ public class StateUpdate internal constructor(public val kind: Kind, public val 
 
     override fun toString(): String = "StateUpdate($kind at $timeMs ms)"
 }
+
+private fun seconds(ms: Long): String = "${ms / 1000}.${(ms % 1000) / 100} s"

@@ -24,6 +24,10 @@ import kotlin.time.Duration.Companion.seconds
  * @property settingsCache where learned settings are kept, by the robot's address and layout; an entry is used only
  *   when the robot's `hello` reports the same settings checksum, so a robot whose settings changed elsewhere is read
  *   again. null reads on every connect.
+ * @property role drive (if no other host does), watch, or take the robot over ([Role]); asked at the connect and, as
+ *   [Role.DRIVE] after a take-over, at every reconnect.
+ * @property hostLabel who this host is, for the people at other hosts: `<program>@<computer>`, e.g. `panel@lab-pc`
+ *   (the robot keeps 16 bytes of it). On the JVM `HostLabel.of("panel")` makes one.
  */
 public class RobotOptions(
     public val syncMode: SyncMode = SyncMode.FULL,
@@ -37,6 +41,8 @@ public class RobotOptions(
     public val heartbeatPeriod: Duration? = null,
     public val reconnect: ReconnectPolicy = ReconnectPolicy(),
     public val settingsCache: SettingsCache? = SettingsCache.shared,
+    public val role: Role = Role.DRIVE,
+    public val hostLabel: String = "pocketbot-sdk",
 ) {
     init {
         require(syncPeriod in 1.milliseconds..60.seconds) { "syncPeriod $syncPeriod is outside 1 ms .. 60 s" }
@@ -57,32 +63,35 @@ public class RobotOptions(
         heartbeatPeriod: Duration? = this.heartbeatPeriod,
         reconnect: ReconnectPolicy = this.reconnect,
         settingsCache: SettingsCache? = this.settingsCache,
+        role: Role = this.role,
+        hostLabel: String = this.hostLabel,
     ): RobotOptions = RobotOptions(
         syncMode, syncPeriod, helloTimeout, helloAttempts, commandTimeout, commandRetries, settingsReadTimeout,
-        silenceTimeout, heartbeatPeriod, reconnect, settingsCache,
+        silenceTimeout, heartbeatPeriod, reconnect, settingsCache, role, hostLabel,
     )
 }
 
 /**
- * Backoff between reconnect attempts: [initialDelay], then times [factor] up to [maxDelay]; after [maxAttempts]
- * failed attempts in a row the robot is closed. The cap is short on purpose: a link that comes back is noticed
- * within [maxDelay] (a failed attempt on a link that is down costs little: a refused socket, an absent tty).
+ * When to try again after a link loss: every [initialDelay] for the first [quickFor] (while the robot's failsafe,
+ * 1 s by default, has not stopped it yet, a link that comes back is found within [initialDelay]), then with a delay
+ * growing by [factor] up to [maxDelay]; after [maxAttempts] failed attempts in a row the robot is closed. A failed
+ * attempt on a link that is down costs little (a refused socket, an absent tty).
  */
 public class ReconnectPolicy(
-    public val initialDelay: Duration = 50.milliseconds,
-    public val maxDelay: Duration = 250.milliseconds,
+    public val initialDelay: Duration = 25.milliseconds,
+    public val maxDelay: Duration = 1.seconds,
     public val factor: Double = 2.0,
     public val maxAttempts: Int = Int.MAX_VALUE,
+    public val quickFor: Duration = 2.seconds,
 ) {
     init {
         require(!initialDelay.isNegative() && maxDelay >= initialDelay) { "need 0 <= initialDelay <= maxDelay" }
         require(factor >= 1.0) { "factor must be at least 1" }
         require(maxAttempts >= 1) { "maxAttempts must be at least 1" }
+        require(!quickFor.isNegative()) { "quickFor must not be negative" }
     }
 
-    internal fun delayBefore(attempt: Int): Duration {
-        var d = initialDelay
-        repeat(attempt - 1) { d = minOf(maxDelay, d * factor) }
-        return minOf(d, maxDelay)
-    }
+    /** The wait before the next attempt, [since] the loss, when the wait before the last one was [last] (null: none yet). */
+    internal fun nextDelay(since: Duration, last: Duration?): Duration =
+        if (since < quickFor || last == null) initialDelay else minOf(maxDelay, maxOf(last, initialDelay) * factor)
 }

@@ -85,7 +85,7 @@ public class IdentitySettings internal constructor(s: SettingsBase) {
 
 /** State reflection: what the robot sends on its own, and how often. */
 public class SyncSettings internal constructor(s: SettingsBase) {
-    /** Full, reduced or no state packets (0..2). Setting `sync.mode`. */
+    /** None, full or reduced state packets (one of none, full, reduced). Setting `sync.mode`. */
     public val mode: EnumSetting<SyncMode> = s.enum("sync.mode", SyncMode.entries.filter { it.code >= 0 }) { it.code }
 
     /** Period of state packets (1..60000, ms). Setting `sync.period_ms`. */

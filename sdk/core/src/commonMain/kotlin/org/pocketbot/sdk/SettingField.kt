@@ -45,6 +45,23 @@ public sealed class SettingField<T> constructor(
     /** The value the robot confirmed last (read at connect, then every acknowledged write). */
     public val value: T get() = decode(mirror.bytes.value)
 
+    /**
+     * [value] as people read and type it: a real number as the shortest decimal that reads back to the robot's float
+     * (`0.0004`), an enumeration by name (`full`), a list as `[1, 2, 3]`, text as it is. [parse] reads it back.
+     */
+    public val valueText: String get() = format(value)
+
+    /**
+     * What the robot accepts, for people: `0..100000` for a number with bounds (as [valueText] writes numbers), the
+     * names for an enumeration (`none, full, reduced`), empty otherwise.
+     */
+    public open val rangeText: String
+        get() {
+            val lo = min ?: return ""
+            val hi = max ?: return ""
+            return "${lo.toDecimalString()}..${hi.toDecimalString()}"
+        }
+
     /** [value] now and after every change. */
     public val changes: Flow<T> get() = mirror.bytes.map { decode(it) }.distinctUntilChanged()
 
@@ -59,8 +76,10 @@ public sealed class SettingField<T> constructor(
         encode(value, bytes)
         try {
             link.command(UpdateSettings(info.offset, bytes))
+        } catch (e: NotDriverException) {
+            throw e // not the value: the robot takes no settings from a host that watches
         } catch (e: CommandRefusedException) {
-            throw SettingRefusedException(name, value, e.code, e.detail)
+            throw SettingRefusedException(name, value, e.code, e.detail, format(value), rangeText)
         }
         link.serial { mirror.written(info.offset, bytes) }
     }
@@ -68,10 +87,16 @@ public sealed class SettingField<T> constructor(
     /** Parses [text] as a value of this setting (as a person types it), for [set]. */
     public abstract fun parse(text: String): T
 
+    /** [value] as people read it, and as [parse] reads it back (see [valueText]). */
+    public open fun format(value: T): String = value.toString()
+
     internal abstract fun decode(settings: ByteArray): T
+
+    /** This field's value in [settings], formatted. */
+    internal fun textOf(settings: ByteArray): String = format(decode(settings))
     internal abstract fun encode(value: T, out: ByteArray)
 
-    override fun toString(): String = "$name = $value${if (unit.isEmpty()) "" else " $unit"}"
+    override fun toString(): String = "$name = $valueText${if (unit.isEmpty()) "" else " $unit"}"
 }
 
 /** A setting holding a real number (stored by the robot as binary32, so it reads back rounded to that). */
@@ -82,6 +107,7 @@ public class DoubleSetting internal constructor(link: LinkPort, mirror: Settings
     }
 
     override fun parse(text: String): Double = text.trim().toDoubleOrNull() ?: throw IllegalArgumentException("$name needs a number, not \"$text\"")
+    override fun format(value: Double): String = value.toFloat().toDecimalString()
     override fun decode(settings: ByteArray): Double = readNumber(settings, info.offset, info.type).toDouble()
     override fun encode(value: Double, out: ByteArray): Unit = writeNumber(out, 0, info.type, value, name)
 }
@@ -113,8 +139,21 @@ public class EnumSetting<E : Enum<E>> internal constructor(
         require(info.type == FieldType.U8 && info.count == 1) { "${info.path} is not an enumeration" }
     }
 
+    /** The names of [values] as people read and type them: `none`, `full`, `reduced`. */
+    public val names: List<String> get() = values.map { it.name.lowercase() }
+
+    override val rangeText: String get() = names.joinToString()
+
     override fun parse(text: String): E = values.firstOrNull { it.name.equals(text.trim(), ignoreCase = true) }
-        ?: throw IllegalArgumentException("$name is one of ${values.joinToString { it.name.lowercase() }}, not \"$text\"")
+        ?: throw IllegalArgumentException("$name is one of ${names.joinToString()}, not \"$text\"")
+
+    override fun format(value: E): String = value.name.lowercase()
+
+    /** The name of the value with wire [code], or null when none of [values] has it. */
+    internal fun nameOf(code: Int): String? = values.firstOrNull { codeOf(it) == code }?.let(::format)
+
+    /** The wire code of the value called [name] (as [parse] reads it), or null. */
+    internal fun codeOfName(name: String): Int? = values.firstOrNull { it.name.equals(name.trim(), ignoreCase = true) }?.let(codeOf)
 
     override fun decode(settings: ByteArray): E {
         val code = readNumber(settings, info.offset, info.type).toInt()

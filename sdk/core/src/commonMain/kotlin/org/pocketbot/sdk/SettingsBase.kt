@@ -32,6 +32,8 @@ public abstract class SettingsBase internal constructor(internal val linkPort: L
     /** Every setting, in struct order. */
     public val fields: List<SettingField<*>> get() = byName.values.sortedBy { it.info.offset }
 
+    private val json by lazy { SettingsJson(byName.values.filterIsInstance<EnumSetting<*>>().associateBy { it.name }) }
+
     /** The setting called [name] (e.g. `line_pid.kp`), or null. */
     public operator fun get(name: String): SettingField<*>? = byName[name]
 
@@ -61,12 +63,14 @@ public abstract class SettingsBase internal constructor(internal val linkPort: L
 
     /**
      * All settings as JSON, grouped by the first part of their names:
-     * `{"identity": {"robot_id": 1, "name": "PocketBot"}, "speed_pid": {"kp": 2500.0, ...}, ...}`.
+     * `{"identity": {"robot_id": 1, "name": "PocketBot"}, "sync": {"mode": "full", ...}, "speed_pid": {"kp": 2500, ...}, ...}`.
+     * A real number is the shortest decimal that reads back to the robot's float (`0.0004`), an enumeration its name.
      */
-    public fun exportJson(): String = SettingsJson.export(store.bytes.value)
+    public fun exportJson(): String = json.export(store.bytes.value)
 
     /**
-     * Writes every setting in [json] (the format of [exportJson]; settings may be left out) whose value differs from
+     * Writes every setting in [json] (the format of [exportJson]; settings may be left out, an enumeration may be given
+     * by its code too) whose value differs from
      * the robot's, adjacent settings together in one `update_settings` of at most 64 bytes. Suspends until all are
      * acknowledged; returns how many settings were written. Nothing is written when the JSON does not parse.
      *
@@ -75,18 +79,20 @@ public abstract class SettingsBase internal constructor(internal val linkPort: L
      */
     public suspend fun importJson(json: String): Int {
         val current = store.bytes.value
-        val wanted = SettingsJson.parse(json, current)
+        val wanted = this.json.parse(json, current)
         val changed = SETTINGS_FIELDS.filter { f -> (f.offset until f.offset + f.size).any { wanted[it] != current[it] } }
         for (run in SettingsJson.runs(changed)) {
             val start = run.first().offset
             val data = wanted.copyOfRange(start, run.last().offset + run.last().size)
             try {
                 linkPort.command(UpdateSettings(start, data))
+            } catch (e: NotDriverException) {
+                throw e // not the values: the robot takes no settings from a host that watches
             } catch (e: CommandRefusedException) {
                 // The robot names the offending field by its offset; a range error names the start of the run.
                 val culprit = run.firstOrNull { it.offset == e.detail } ?: run.first()
                 val field = byName.getValue(culprit.path)
-                throw SettingRefusedException(culprit.path, field.decode(wanted), e.code, e.detail)
+                throw SettingRefusedException(culprit.path, field.decode(wanted), e.code, e.detail, field.textOf(wanted), field.rangeText)
             }
             linkPort.serial { store.written(start, data) }
         }

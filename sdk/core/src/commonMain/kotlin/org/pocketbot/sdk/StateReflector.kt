@@ -26,7 +26,8 @@ import kotlin.time.Duration.Companion.seconds
  * ```
  * The reflector is the one owner of the sync mode and period: writing `robot.settings.sync.mode` or `.periodMs`, or
  * loading the defaults, changes it too. The choice survives reconnects and robot resets (it is sent again after
- * each handshake).
+ * each handshake). Every host connected to a robot gets the same state: the driver chooses it; a host that watches
+ * takes the robot's mode and period as they are ([set] is the driver's).
  */
 public class StateReflector internal constructor(private val link: LinkPort, private val mirror: SettingsMirror) {
     private val _mode = MutableStateFlow(link.options.syncMode)
@@ -60,6 +61,13 @@ public class StateReflector internal constructor(private val link: LinkPort, pri
     internal suspend fun restore(exchange: suspend (Packet) -> Unit) {
         exchange(SetSync(desiredMode.code, desiredPeriod.inWholeMilliseconds.toInt()))
         confirm(desiredMode, desiredPeriod)
+    }
+
+    /** After a handshake of a host that watches: the robot runs the mode its settings say (the driver's choice). */
+    internal fun adoptRobots() {
+        val sync = mirror.values.value.sync
+        val mode = SyncMode.entries.firstOrNull { it.code == sync.mode } ?: return
+        adopted(mode, sync.periodMs.milliseconds)
     }
 
     /** The robot runs [mode] every [period] now, and keeps them in settings.sync: the mirror says so too. */

@@ -12,8 +12,12 @@ import kotlinx.coroutines.yield
 import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SyncMode
+import kotlin.concurrent.Volatile
+import kotlin.math.PI
+import kotlin.math.abs
 import kotlin.math.sqrt
 import kotlin.time.Duration
+import kotlin.time.Duration.Companion.seconds
 
 /** The robot's PID controllers a user tunes (thesis 6.6): what each one measures, and its gains. */
 public enum class Controller(public val title: String, public val unit: String) {
@@ -99,12 +103,68 @@ public class StepResponse(
 }
 
 /**
+ * How big a [Tuner.stepTest] is: the speed of its step, and how far or how long the robot moves.
+ *
+ * - robot speed and wheel balance: [distanceM] straight at [speedMps] (a movement, on its speed profile);
+ * - wheel speed: both wheels at [speedMps] for [duration] (teleoperation), then 0;
+ * - line: line following at [speedMps] for [duration] (the robot must be on a line).
+ */
+public class StepSize(public val speedMps: Double, public val distanceM: Double, public val duration: Duration) {
+    init {
+        require(speedMps > 0 && speedMps <= MAX_SPEED_MPS) { "a step's speed must be in (0, $MAX_SPEED_MPS] m/s, was $speedMps" }
+        require(distanceM > 0 && distanceM <= MAX_DISTANCE_M) { "a step's distance must be in (0, $MAX_DISTANCE_M] m, was $distanceM" }
+        require(duration.isPositive() && duration <= MAX_DURATION) { "a step's duration must be in (0, $MAX_DURATION], was $duration" }
+    }
+
+    /** What the robot will do for [controller], for people to confirm: it moves, and needs room (and a line). */
+    public fun describe(controller: Controller): String {
+        val v = speedMps.toDecimalString()
+        val s = (duration.inWholeMilliseconds / 1000.0).toDecimalString()
+        return when (controller) {
+            Controller.ROBOT_SPEED, Controller.WHEEL_BALANCE -> "drives ${distanceM.toDecimalString()} m straight ahead at $v m/s"
+            Controller.WHEEL_SPEED -> "drives straight ahead at $v m/s for $s s (about ${(speedMps * duration.inWholeMilliseconds / 1000).roundTo(2)} m)"
+            Controller.LINE -> "follows the line at $v m/s for $s s: put it on a line first"
+        }
+    }
+
+    override fun equals(other: Any?): Boolean =
+        other is StepSize && speedMps == other.speedMps && distanceM == other.distanceM && duration == other.duration
+
+    override fun hashCode(): Int = (speedMps.hashCode() * 31 + distanceM.hashCode()) * 31 + duration.hashCode()
+    override fun toString(): String = "StepSize($speedMps m/s, $distanceM m, $duration)"
+
+    public companion object {
+        /** The fastest step: the robot's top speed. */
+        public const val MAX_SPEED_MPS: Double = 0.5
+
+        /** The longest movement of a step. */
+        public const val MAX_DISTANCE_M: Double = 2.0
+
+        /** The longest step. */
+        public val MAX_DURATION: Duration = 10.seconds
+
+        /** The standard step of [controller]: 30 cm at 0.2 m/s, the wheels at 0.15 m/s for 1 s, or 2 s of line following at 0.15 m/s. */
+        public fun defaultFor(controller: Controller): StepSize = when (controller) {
+            Controller.ROBOT_SPEED, Controller.WHEEL_BALANCE -> StepSize(0.2, 0.3, 1.seconds)
+            Controller.WHEEL_SPEED -> StepSize(0.15, 0.15, 1.seconds)
+            Controller.LINE -> StepSize(0.15, 0.3, 2.seconds)
+        }
+    }
+}
+
+private fun Double.roundTo(places: Int): String {
+    var scale = 1.0
+    repeat(places) { scale *= 10 }
+    return (kotlin.math.round(this * scale) / scale).toDecimalString()
+}
+
+/**
  * PID tuning for one robot: fast samples of a [Controller] (setpoint and measured value) and a standard step test.
  *
  * ```
  * val tuner = Tuner(robot)
  * tuner.begin()                                   // reduced state at the fastest rate the link carries
- * val response = tuner.stepTest(Controller.ROBOT_SPEED)
+ * val response = tuner.stepTest(Controller.ROBOT_SPEED, StepSize(speedMps = 0.2, distanceM = 0.3, duration = 1.seconds))
  * robot.settings.speedPid.kp.set(response.gains[0] * 1.2)
  * tuner.end()                                     // the sync mode the robot had before
  * ```
@@ -113,7 +173,10 @@ public class Tuner(private val robot: Robot) {
     private val commanded = MutableStateFlow<Double?>(null)
     private var before: Pair<SyncMode, Duration>? = null
 
-    /** What [stepTest] asks of the controller now, or null while no step test runs. */
+    /** The movement of a robot speed step test, once the robot has it: the setpoint follows its speed profile. */
+    @Volatile private var profile: SpeedProfile? = null
+
+    /** The step [stepTest] asks of the controller now (its cruise speed, or 0 after it), or null while no step test runs. */
     public val stepSetpoint: StateFlow<Double?> = commanded.asStateFlow()
 
     /**
@@ -140,38 +203,45 @@ public class Tuner(private val robot: Robot) {
     }
 
     /**
-     * Every state update of the robot as a sample of [controller]. The setpoint is the step test's while one runs;
-     * otherwise the running movement's cruise speed for [Controller.ROBOT_SPEED] and 0 for the others.
+     * Every state update of the robot as a sample of [controller]. The setpoint is the step test's while one runs (for
+     * the robot speed, the speed its profile asks for at that moment: accelerating, cruising, braking); otherwise
+     * the running movement's cruise speed for [Controller.ROBOT_SPEED] and 0 for the others.
      */
     public fun samples(controller: Controller): Flow<TuningSample> = robot.stateUpdates.map { sampleOf(controller, it) }
 
     /** [update] as a sample of [controller], with the setpoint of this moment (see [samples]). */
     public fun sampleOf(controller: Controller, update: StateUpdate): TuningSample =
-        TuningSample(update.timeMs, setpointOf(controller), controller.measure(update.state))
+        TuningSample(update.timeMs, setpointOf(controller, update.state), controller.measure(update.state))
 
-    private fun setpointOf(controller: Controller): Double = commanded.value ?: when (controller) {
-        Controller.ROBOT_SPEED -> when (val m = robot.locomotion.queue.value.firstOrNull()?.movement) {
-            is Movement.Straight -> m.speedMps
-            is Movement.Arc -> m.speedMps
+    private fun setpointOf(controller: Controller, state: RobotState): Double {
+        val step = commanded.value
+        // Until the robot has the step's movement it is not asked to move.
+        if (controller == Controller.ROBOT_SPEED && step != null && step != 0.0) return profile?.speedAt(state) ?: 0.0
+        return step ?: when (controller) {
+            Controller.ROBOT_SPEED -> when (val m = robot.locomotion.queue.value.firstOrNull()?.movement) {
+                is Movement.Straight -> m.speedMps
+                is Movement.Arc -> m.speedMps
+                else -> 0.0
+            }
             else -> 0.0
         }
-        else -> 0.0
     }
 
     /**
-     * Runs the standard manoeuvre of [controller] and returns every sample of it, from the step until the robot
-     * stood still again:
-     * - robot speed and wheel balance: 30 cm straight at 0.2 m/s;
-     * - wheel speed: both wheels at 0.15 m/s for one second, then 0;
-     * - line: two seconds of line following at settings.line_follow.speed_mps (the robot must be on a line).
-     *
-     * The robot moves: give it room. Call [begin] first for fast samples.
+     * Runs the standard manoeuvre of [controller] ([StepSize.defaultFor]) and returns every sample of it: see the
+     * overload with a step size.
      */
-    public suspend fun stepTest(controller: Controller): StepResponse = coroutineScope {
+    public suspend fun stepTest(controller: Controller): StepResponse = stepTest(controller, StepSize.defaultFor(controller))
+
+    /**
+     * Runs the manoeuvre of [controller] at [size] (see [StepSize]) and returns every sample of it, from the step until
+     * the robot stood still again. The robot moves: give it room (ask the user first: [StepSize.describe] says what
+     * the robot will do). Call [begin] first for fast samples.
+     */
+    public suspend fun stepTest(controller: Controller, size: StepSize): StepResponse = coroutineScope {
         val gains = controller.gains(robot.settings).let { listOf(it.kp.value, it.ki.value, it.kd.value) }
         val step = when (controller) {
-            Controller.ROBOT_SPEED -> STEP_SPEED_MPS
-            Controller.WHEEL_SPEED -> WHEEL_STEP_MPS
+            Controller.ROBOT_SPEED, Controller.WHEEL_SPEED -> size.speedMps
             else -> 0.0
         }
         val samples = mutableListOf<TuningSample>()
@@ -180,21 +250,27 @@ public class Tuner(private val robot: Robot) {
         try {
             commanded.value = step
             when (controller) {
-                Controller.ROBOT_SPEED, Controller.WHEEL_BALANCE ->
-                    robot.locomotion.enqueue(Movement.Straight(STEP_DISTANCE_M, STEP_SPEED_MPS)).await()
+                Controller.ROBOT_SPEED, Controller.WHEEL_BALANCE -> {
+                    val movement = Movement.Straight(size.distanceM, size.speedMps)
+                    val handle = robot.locomotion.enqueue(movement)
+                    // The robot started it at most a sample ago, from standing still.
+                    profile = SpeedProfile(movement, robot.settings, robot.state.value)
+                    handle.await()
+                }
                 Controller.WHEEL_SPEED -> {
                     // Teleoperation holds until the next command; sent again now and then so a lost datagram does not
                     // leave the wheels at the old speed.
-                    repeat(WHEEL_STEP_MS / RESEND_MS) {
-                        robot.locomotion.setWheelSpeeds(WHEEL_STEP_MPS, WHEEL_STEP_MPS)
-                        delay(RESEND_MS.toLong())
+                    val steps = (size.duration.inWholeMilliseconds / RESEND_MS).coerceAtLeast(1)
+                    repeat(steps.toInt()) {
+                        robot.locomotion.setWheelSpeeds(size.speedMps, size.speedMps)
+                        delay(RESEND_MS)
                     }
                     commanded.value = 0.0
                     robot.locomotion.setWheelSpeeds(0.0, 0.0)
                 }
                 Controller.LINE -> {
-                    robot.lineFollower.start()
-                    delay(LINE_STEP_MS)
+                    robot.lineFollower.start(size.speedMps)
+                    delay(size.duration)
                     robot.lineFollower.stop()
                 }
             }
@@ -202,6 +278,7 @@ public class Tuner(private val robot: Robot) {
             delay(SETTLE_MS)
         } finally {
             commanded.value = null
+            profile = null
             capture.cancel()
         }
         StepResponse(controller, step, samples.toList(), gains)
@@ -210,12 +287,30 @@ public class Tuner(private val robot: Robot) {
     private companion object {
         val REDUCED_PAYLOAD = PACKET_SPECS.values.single { it.name == "state_reduced" }.maxSize
         const val LINK_SHARE = 0.6
-        private const val STEP_SPEED_MPS = 0.2
-        private const val STEP_DISTANCE_M = 0.3
-        private const val WHEEL_STEP_MPS = 0.15
-        private const val WHEEL_STEP_MS = 1000
-        private const val RESEND_MS = 250
-        private const val LINE_STEP_MS = 2000L
+        private const val RESEND_MS = 250L
         private const val SETTLE_MS = 400L
+    }
+}
+
+/**
+ * The speed a movement's three-segment profile asks for (as the firmware's locomotion computes it): from
+ * profile.min_speed_mps up at profile.accel_mps2 to the cruise speed, and down so as to reach the minimum speed at
+ * the end, v^2 = vmin^2 + 2 * decel * remaining; 0 once the distance is done. Robot time and distance count from
+ * [start], the last state before the robot began it, standing still.
+ */
+private class SpeedProfile(movement: Movement.Straight, settings: RobotSettings, private val start: RobotState) {
+    private val cruise = movement.speedMps
+    private val distance = abs(movement.distanceM)
+    private val accel = settings.profile.accelMps2.value
+    private val decel = settings.profile.decelMps2.value
+    private val vmin = minOf(settings.profile.minSpeedMps.value, cruise)
+    private val metresPerPulse = PI * settings.geometry.wheelDiameterM.value / settings.encoder.pulsesPerRev.value
+
+    fun speedAt(state: RobotState): Double {
+        val seconds = (state.time.timeMs - start.time.timeMs).coerceAtLeast(0) / 1000.0
+        val pulses = (state.encoders.left - start.encoders.left) + (state.encoders.right - start.encoders.right)
+        val remaining = distance - abs(pulses / 2.0 * metresPerPulse)
+        if (remaining <= 0) return 0.0
+        return minOf(cruise, vmin + accel * seconds, sqrt(vmin * vmin + 2 * decel * remaining))
     }
 }

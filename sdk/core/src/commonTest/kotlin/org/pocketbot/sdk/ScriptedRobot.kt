@@ -15,6 +15,11 @@ import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
 import org.pocketbot.protocol.Crc16
+import org.pocketbot.protocol.Driver
+import org.pocketbot.protocol.DriverChange
+import org.pocketbot.protocol.Goodbye
+import org.pocketbot.protocol.HostRole
+import org.pocketbot.protocol.SetRole
 import org.pocketbot.protocol.MovementDone
 import org.pocketbot.protocol.MovementLog
 import org.pocketbot.protocol.MovementOutcome
@@ -42,9 +47,10 @@ import org.pocketbot.sdk.transport.Transport
 import org.pocketbot.sdk.transport.TransportLostException
 
 /**
- * An in-memory robot that speaks the protocol like the firmware: hello with host sessions, acks with a
- * retransmission history (same session, same bytes), read/update settings with the firmware's bounds checks, a
- * movement queue with results and a log. Tests script what it sends (states, movement ends) and inject faults (lost
+ * An in-memory robot that speaks the protocol like the firmware: hello with host sessions, the driver rule (the host
+ * drives unless [otherDriver] does; a watcher's commands are refused), acks with a retransmission history (same
+ * session, same bytes), read/update settings with the firmware's bounds checks, a movement queue with results and a
+ * log. Tests script what it sends (states, movement ends) and inject faults (lost
  * frames in either direction, disconnects, resets). Everything runs synchronously inside [Transport.send], so tests
  * are deterministic.
  */
@@ -78,6 +84,14 @@ class ScriptedRobot(
 
     /** The host session the robot serves; 0 after a reset. */
     var session = 0L
+
+    /** The label of another host that drives the robot, or null; set it to play that host. */
+    var otherDriver: String? = null
+
+    /** True while the host under test drives. */
+    var hostDrives = false
+        private set
+    private var hostLabel = ""
     var syncMode = 1
     var syncPeriodMs = 100
 
@@ -202,11 +216,26 @@ class ScriptedRobot(
         updateLocomotion()
     }
 
-    /** Power cycle: queue, log, session and history are gone; the robot says hello unasked. */
+    /** Another host takes the robot over: the host under test is told, and watches. */
+    fun takenOverBy(label: String) {
+        otherDriver = label
+        hostDrives = false
+        sayWhoDrives(DriverChange.TAKEN_OVER)
+    }
+
+    private fun sayWhoDrives(change: DriverChange, seq: Int = 0) = send(
+        Driver(if (hostDrives) HostRole.DRIVE.code else HostRole.WATCH.code, change.code,
+            if (hostDrives) hostLabel else otherDriver ?: "", state.time.timeMs),
+        seq,
+    )
+
+    /** Power cycle: queue, log, session, history and the drive are gone; the robot says hello unasked. */
     fun reset() {
         queue.clear()
         log.clear()
         history.clear()
+        hostDrives = false
+        otherDriver = null
         session = 0
         finishedId = 0
         state = EMPTY_STATE
@@ -256,10 +285,15 @@ class ScriptedRobot(
             if (answersHello) send(hello(resumed), seq)
             return
         }
+        if (!spec.watcherOk && !hostDrives) {
+            sayWhoDrives(DriverChange.NONE)
+            send(Error(ErrorCode.NOT_DRIVER.code, packet.type, seq, 0), seq)
+            return
+        }
         if (!spec.acked) return
         if (refuseToAck?.invoke(packet) == true) return
         val content = frame.toList()
-        if (packet !is ReadSettings && packet !is ReadMovements && history.contains(seq to content)) {
+        if (!spec.idempotent && history.contains(seq to content)) {
             send(Ack(packet.type), seq)
             return
         }
@@ -311,6 +345,24 @@ class ScriptedRobot(
                 poke("sync.mode", packet.mode)
                 poke("sync.period_ms", packet.periodMs)
             }
+            is SetRole -> {
+                hostLabel = packet.label
+                val before = hostDrives
+                val tookFrom = otherDriver
+                hostDrives = when (packet.role) {
+                    HostRole.WATCH.code -> false
+                    HostRole.TAKE_OVER.code -> true.also { otherDriver = null }
+                    else -> hostDrives || otherDriver == null
+                }
+                sayWhoDrives(
+                    when {
+                        !hostDrives || before -> DriverChange.NONE
+                        packet.role == HostRole.TAKE_OVER.code && tookFrom != null -> DriverChange.TAKEN_OVER
+                        else -> DriverChange.CLAIMED
+                    },
+                )
+            }
+            is Goodbye -> hostDrives = false
             is MoveStraight -> return enqueue(packet.id)
             is MoveRotate -> return enqueue(packet.id)
             is MoveArc -> return enqueue(packet.id)

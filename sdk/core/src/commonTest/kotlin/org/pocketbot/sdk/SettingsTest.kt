@@ -253,3 +253,56 @@ class SettingsTest {
         robot.close()
     }
 }
+
+/** Settings as people read and type them, and as JSON files keep them: the faces' common vocabulary. */
+class SettingsTextTest {
+    @Test
+    fun aFloatSettingReadsAsItsShortestDecimalAndAnEnumSettingByName() = runTest {
+        val robot = connect(ScriptedRobot())
+        robot.settings.linePid.kp.set(0.0004)
+        assertEquals("0.0004", robot.settings.linePid.kp.valueText)
+        assertEquals("line_pid.kp = 0.0004", robot.settings.linePid.kp.toString())
+        robot.settings.track.speedMps.set(0.15)
+        assertEquals("0.15", robot.settings.track.speedMps.valueText)
+        assertEquals("0..100000", robot.settings.linePid.kp.rangeText)
+        assertEquals("0.01..20", robot.settings.profile.accelMps2.rangeText)
+        val mode = robot.settings.sync.mode
+        assertEquals(listOf("none", "full", "reduced"), mode.names)
+        assertEquals("none, full, reduced", mode.rangeText)
+        assertEquals("none", mode.valueText)
+        assertEquals(SyncMode.FULL, mode.parse(mode.format(SyncMode.FULL)))
+        val refused = assertFailsWith<IllegalArgumentException> { mode.parse("1") }
+        assertTrue("none, full, reduced" in refused.message!!, refused.message)
+        assertEquals("", robot.settings.identity.name.rangeText)
+        robot.close()
+    }
+
+    @Test
+    fun aRefusalSaysWhatTheRobotAcceptsInWords() = runTest {
+        val robot = connect(ScriptedRobot())
+        val e = assertFailsWith<SettingRefusedException> { robot.settings.linePid.kp.set(-1.0) }
+        assertEquals("robot refused line_pid.kp = -1: outside the range it accepts (0..100000)", e.message)
+        robot.close()
+    }
+
+    @Test
+    fun jsonKeepsFloatsExactAsShortDecimalsAndEnumsByName() = runTest {
+        val robot = connect(ScriptedRobot())
+        robot.settings.linePid.kp.set(0.0004)
+        robot.settings.profile.accelMps2.set(0.15)
+        val json = robot.settings.exportJson()
+        assertTrue("\"kp\": 0.0004," in json, json)
+        assertTrue("\"accel_mps2\": 0.15," in json, json)
+        assertTrue("\"mode\": \"none\"," in json, json)
+        assertTrue(!Regex("\\d[eE]-?\\d").containsMatchIn(json), "no exponent: $json")
+        // Read back: the same floats, and an enumeration by name or by code.
+        assertEquals(0, robot.settings.importJson(json))
+        assertEquals(1, robot.settings.importJson("""{"sync": {"mode": "reduced"}}"""))
+        assertEquals(SyncMode.REDUCED, robot.settings.sync.mode.value)
+        assertEquals(1, robot.settings.importJson("""{"sync": {"mode": 1}}"""))
+        assertEquals(SyncMode.FULL, robot.settings.sync.mode.value)
+        val bad = assertFailsWith<IllegalArgumentException> { robot.settings.importJson("""{"sync": {"mode": "fast"}}""") }
+        assertTrue("none, full, reduced" in bad.message!!, bad.message)
+        robot.close()
+    }
+}

@@ -1117,6 +1117,24 @@ class JavolutionWitnessTest {
         assertEquals(Float.fromBits(0x44444a00.toInt()), s.done15.get(), "movement_log.done15")
     }
 
+    private class Driver0 : LePacked() {
+        val role = Unsigned8()
+        val change = Unsigned8()
+        val label = UTF8String(16)
+        val time_ms = Unsigned32()
+    }
+
+    @Test fun driver0() {
+        val bytes = hex("00040000000000000000000000000000000022573f62")
+        val s = Driver0()
+        assertEquals(bytes.size, s.size(), "driver size")
+        s.setByteBuffer(ByteBuffer.wrap(bytes).order(ByteOrder.LITTLE_ENDIAN), 0)
+        assertEquals(0.toShort(), s.role.get(), "driver.role")
+        assertEquals(4.toShort(), s.change.get(), "driver.change")
+        assertEquals("", s.label.get(), "driver.label")
+        assertEquals(1648318242L, s.time_ms.get(), "driver.time_ms")
+    }
+
     private class HelloRequest0 : LePacked() {
         val host_protocol_version = Unsigned16()
         val session = Unsigned32()
@@ -1139,6 +1157,32 @@ class JavolutionWitnessTest {
         val s = Heartbeat0()
         assertEquals(bytes.size, s.size(), "heartbeat size")
         s.setByteBuffer(ByteBuffer.wrap(bytes).order(ByteOrder.LITTLE_ENDIAN), 0)
+    }
+
+    private class SetRole0 : LePacked() {
+        val role = Unsigned8()
+        val label = UTF8String(16)
+    }
+
+    @Test fun setRole0() {
+        val bytes = hex("01506f636b6574426f742d370000000000")
+        val s = SetRole0()
+        assertEquals(bytes.size, s.size(), "set_role size")
+        s.setByteBuffer(ByteBuffer.wrap(bytes).order(ByteOrder.LITTLE_ENDIAN), 0)
+        assertEquals(1.toShort(), s.role.get(), "set_role.role")
+        assertEquals("PocketBot-7", s.label.get(), "set_role.label")
+    }
+
+    private class Goodbye0 : LePacked() {
+        val queue = Unsigned8()
+    }
+
+    @Test fun goodbye0() {
+        val bytes = hex("01")
+        val s = Goodbye0()
+        assertEquals(bytes.size, s.size(), "goodbye size")
+        s.setByteBuffer(ByteBuffer.wrap(bytes).order(ByteOrder.LITTLE_ENDIAN), 0)
+        assertEquals(1.toShort(), s.queue.get(), "goodbye.queue")
     }
 
     private class SetSync0 : LePacked() {

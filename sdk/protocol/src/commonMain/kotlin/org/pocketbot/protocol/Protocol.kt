@@ -3,9 +3,9 @@ package org.pocketbot.protocol
 
 /** Constants of the protocol this SDK speaks. */
 public object ProtocolInfo {
-    public const val VERSION: Int = 2
+    public const val VERSION: Int = 3
     /** Hash of every packet, settings and state layout; compared with the robot's `hello`. */
-    public const val LAYOUT_HASH: Long = 0xC4D4A61DL
+    public const val LAYOUT_HASH: Long = 0x14AF42C3L
     /** Firmware version this SDK was generated with. */
     public const val FIRMWARE_VERSION: String = "0.1.0"
     public const val MAX_PAYLOAD: Int = 120
@@ -210,6 +210,10 @@ public enum class ErrorCode(public val code: Int) {
     FRAMING(10),
     BUSY(11),
     BAD_SEQUENCE(12),
+    /** The command changes the robot, and another host drives it: this link only watches (the `driver` packet just before it names the driver). */
+    NOT_DRIVER(13),
+    /** Not the robot but what connects to it (the emulator's endpoint, a gateway): every host link of the robot is in use, so this host got none; detail: how many the robot has. */
+    NO_FREE_LINK(14),
     /** A code this side does not know. */
     UNKNOWN(-1);
     public companion object {
@@ -228,6 +232,8 @@ public enum class ErrorCode(public val code: Int) {
             10 -> FRAMING
             11 -> BUSY
             12 -> BAD_SEQUENCE
+            13 -> NOT_DRIVER
+            14 -> NO_FREE_LINK
             else -> UNKNOWN
         }
     }
@@ -255,6 +261,81 @@ public enum class MovementOutcome(public val code: Int) {
             1 -> STOPPED
             2 -> FAILSAFE
             3 -> DROPPED
+            else -> UNKNOWN
+        }
+    }
+}
+
+/**
+ * What a host asks to be (`set_role`) and what it is (`driver`).
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
+public enum class HostRole(public val code: Int) {
+    /** State, console and reads; commands that change the robot are refused (`not_driver`). */
+    WATCH(0),
+    /** Drive the robot if no host drives it, else watch until the driver leaves (then the robot hands it the drive). */
+    DRIVE(1),
+    /** Drive the robot, taking it from the host that drives it (which watches from then on and is told so). */
+    TAKE_OVER(2),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
+    public companion object {
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): HostRole = when (code) {
+            0 -> WATCH
+            1 -> DRIVE
+            2 -> TAKE_OVER
+            else -> UNKNOWN
+        }
+    }
+}
+
+/**
+ * Why the robot sends `driver`.
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
+public enum class DriverChange(public val code: Int) {
+    /** Nothing changed: the answer to `set_role`, or to a refused command. */
+    NONE(0),
+    /** A host began to drive a robot no host drove. */
+    CLAIMED(1),
+    /** A host took the robot over from the host that drove it. */
+    TAKEN_OVER(2),
+    /** The driver said `goodbye` or asked to watch. */
+    LEFT(3),
+    /** Nothing came from the driver for link.failsafe_timeout_ms (1000 ms when the failsafe is off): its link is lost and the robot no longer keeps the drive for it. */
+    LOST(4),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
+    public companion object {
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): DriverChange = when (code) {
+            0 -> NONE
+            1 -> CLAIMED
+            2 -> TAKEN_OVER
+            3 -> LEFT
+            4 -> LOST
+            else -> UNKNOWN
+        }
+    }
+}
+
+/**
+ * What the robot does with what the leaving driver queued (`goodbye`).
+ * [fromCode] maps a code this side does not know to [UNKNOWN] (code -1, never sent by the robot).
+ */
+public enum class LeaveQueue(public val code: Int) {
+    /** The queued movements run to their end; teleoperation stops; line following and the track behaviour go on as the failsafe would leave them. */
+    FINISH(0),
+    /** As `stop`: the running movement brakes, queued ones are dropped, teleoperation, line following and the track behaviour end. */
+    DROP(1),
+    /** A code this side does not know. */
+    UNKNOWN(-1);
+    public companion object {
+        /** The value with this wire code; [UNKNOWN] for a code this side does not know. */
+        public fun fromCode(code: Int): LeaveQueue = when (code) {
+            0 -> FINISH
+            1 -> DROP
             else -> UNKNOWN
         }
     }
@@ -504,7 +585,7 @@ public class SettingsIdentity(
 
 /** State reflection: what the robot sends on its own, and how often. */
 public class SettingsSync(
-    /** full, reduced or no state packets (see [SyncMode]) */
+    /** none, full or reduced state packets (see [SyncMode]) */
     public val mode: Int,
     /** period of state packets, in ms */
     public val periodMs: Int,
@@ -2035,7 +2116,46 @@ public data class MovementLog(
     }
 }
 
-/** Ask for `hello`; starts a new host session unless `session` is the one the robot serves. */
+/** Who drives the robot, to one link: in answer to `set_role` (before its `ack`), after a command refused with `not_driver`, and to every link when the driver changes. */
+public data class Driver(
+    /** this link's role now: watch or drive (see [HostRole]) */
+    public val role: Int,
+    /** what changed (see [DriverChange]) */
+    public val change: Int,
+    /** the label the driving host gave in `set_role`; empty when no host drives */
+    public val label: String,
+    /** robot time now (lower than a host saw before: the robot was reset meanwhile), in ms */
+    public val timeMs: Long,
+) : Packet {
+    override val type: Int get() = 11
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 22
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, role)
+        b.putU8(at + 1, change)
+        b.putText(at + 2, label, 16)
+        b.putU32(at + 18, timeMs)
+    }
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
+    public companion object {
+        /** Encoded size in bytes. */
+        public const val SIZE: Int = 22
+        /** Packet type. */
+        public const val TYPE: Int = 11
+        internal const val PAYLOAD_SIZE_MAX: Int = 22
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): Driver {
+            val role = b.u8(at)
+            val change = b.u8(at + 1)
+            val label = b.text(at + 2, 16)
+            val timeMs = b.u32(at + 18)
+            return Driver(role, change, label, timeMs)
+        }
+    }
+}
+
+/** Ask for `hello`; starts a new host session on this link unless `session` is one the robot serves (on this link or, after a reconnect, another). */
 public data class HelloRequest(
     /** protocol version of the host */
     public val hostProtocolVersion: Int,
@@ -2083,6 +2203,64 @@ public data object Heartbeat : Packet {
     /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
     @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
     internal fun decode(b: ByteArray, at: Int, end: Int): Heartbeat = Heartbeat
+}
+
+/** Drive, watch or take over the robot, under a short label that other hosts are shown (e.g. `panel@lab-pc`). Answered by `driver` (the role this link got), then `ack`. */
+public data class SetRole(
+    /** watch, drive (if no host drives) or take over (see [HostRole]) */
+    public val role: Int,
+    /** who this host is, for people: `<program>@<computer>` */
+    public val label: String,
+) : Packet {
+    override val type: Int get() = 23
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 17
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, role)
+        b.putText(at + 1, label, 16)
+    }
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
+    public companion object {
+        /** Encoded size in bytes. */
+        public const val SIZE: Int = 17
+        /** Packet type. */
+        public const val TYPE: Int = 23
+        internal const val PAYLOAD_SIZE_MAX: Int = 17
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): SetRole {
+            val role = b.u8(at)
+            val label = b.text(at + 1, 16)
+            return SetRole(role, label)
+        }
+    }
+}
+
+/** The host leaves on purpose: the robot finishes or drops what it queued (the driver's choice) instead of the failsafe stopping it, and the drive is free. From a watcher it changes nothing. */
+public data class Goodbye(
+    /** finish or drop the queued movements (see [LeaveQueue]) */
+    public val queue: Int,
+) : Packet {
+    override val type: Int get() = 24
+    /** Encoded payload size in bytes. */
+    internal val payloadSize: Int get() = 1
+    internal fun encodeTo(b: ByteArray, at: Int) {
+        b.putU8(at, queue)
+    }
+    override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
+    public companion object {
+        /** Encoded size in bytes. */
+        public const val SIZE: Int = 1
+        /** Packet type. */
+        public const val TYPE: Int = 24
+        internal const val PAYLOAD_SIZE_MAX: Int = 1
+        /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
+        @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
+        internal fun decode(b: ByteArray, at: Int, end: Int): Goodbye {
+            val queue = b.u8(at)
+            return Goodbye(queue)
+        }
+    }
 }
 
 /** Choose the state reflection mode and period (also stored in settings.sync). */
@@ -2326,7 +2504,7 @@ public data class MoveArc(
     }
 }
 
-/** Stop: the running movement brakes on the profile (at once when `immediate`) and ends as stopped, queued ones are dropped; also ends teleoperation and line following. */
+/** Stop: the running movement brakes on the profile (at once when `immediate`) and ends as stopped, queued ones are dropped; also ends teleoperation and line following. Obeyed from every host, watchers included: anyone who sees a robot may stop it; the drive stays where it was. */
 public data class Stop(
     /** 1: motors off at once */
     public val immediate: Int,
@@ -2512,36 +2690,41 @@ public class PacketSpec(
     public val fromRobot: Boolean, public val acked: Boolean,
     /** A read: the robot answers it every time and never takes it for a retransmission. */
     public val idempotent: Boolean,
+    /** Obeyed from a host that only watches the robot (reads, heartbeats, the role, goodbye, stop). */
+    public val watcherOk: Boolean,
 )
 
 /** Every packet type of the protocol. */
 public val PACKET_SPECS: Map<Int, PacketSpec> = listOf(
-    PacketSpec(1, "hello", 33, 33, true, false, false),
-    PacketSpec(2, "state_full", 97, 97, true, false, false),
-    PacketSpec(3, "state_reduced", 19, 19, true, false, false),
-    PacketSpec(4, "ack", 1, 1, true, false, false),
-    PacketSpec(5, "error", 5, 5, true, false, false),
-    PacketSpec(6, "settings_data", 3, 67, true, false, false),
-    PacketSpec(7, "debug_text", 2, 98, true, false, false),
-    PacketSpec(8, "ir_received", 4, 12, true, false, false),
-    PacketSpec(9, "movement_done", 7, 7, true, false, false),
-    PacketSpec(10, "movement_log", 116, 116, true, false, false),
-    PacketSpec(16, "hello_request", 6, 6, false, false, false),
-    PacketSpec(17, "heartbeat", 0, 0, false, false, false),
-    PacketSpec(18, "set_sync", 3, 3, false, true, false),
-    PacketSpec(19, "update_settings", 4, 67, false, true, false),
-    PacketSpec(20, "read_settings", 0, 0, false, true, true),
-    PacketSpec(21, "save_settings", 0, 0, false, true, false),
-    PacketSpec(22, "load_defaults", 0, 0, false, true, false),
-    PacketSpec(32, "move_straight", 10, 10, false, true, false),
-    PacketSpec(33, "move_rotate", 10, 10, false, true, false),
-    PacketSpec(34, "move_arc", 14, 14, false, true, false),
-    PacketSpec(35, "stop", 1, 1, false, true, false),
-    PacketSpec(36, "wheel_speeds", 8, 8, false, false, false),
-    PacketSpec(37, "line_follow", 6, 6, false, true, false),
-    PacketSpec(38, "ir_send", 1, 9, false, true, false),
-    PacketSpec(40, "track", 1, 1, false, true, false),
-    PacketSpec(39, "read_movements", 0, 0, false, true, true),
+    PacketSpec(1, "hello", 33, 33, true, false, false, false),
+    PacketSpec(2, "state_full", 97, 97, true, false, false, false),
+    PacketSpec(3, "state_reduced", 19, 19, true, false, false, false),
+    PacketSpec(4, "ack", 1, 1, true, false, false, false),
+    PacketSpec(5, "error", 5, 5, true, false, false, false),
+    PacketSpec(6, "settings_data", 3, 67, true, false, false, false),
+    PacketSpec(7, "debug_text", 2, 98, true, false, false, false),
+    PacketSpec(8, "ir_received", 4, 12, true, false, false, false),
+    PacketSpec(9, "movement_done", 7, 7, true, false, false, false),
+    PacketSpec(10, "movement_log", 116, 116, true, false, false, false),
+    PacketSpec(11, "driver", 22, 22, true, false, false, false),
+    PacketSpec(16, "hello_request", 6, 6, false, false, false, true),
+    PacketSpec(17, "heartbeat", 0, 0, false, false, false, true),
+    PacketSpec(23, "set_role", 17, 17, false, true, true, true),
+    PacketSpec(24, "goodbye", 1, 1, false, true, false, true),
+    PacketSpec(18, "set_sync", 3, 3, false, true, false, false),
+    PacketSpec(19, "update_settings", 4, 67, false, true, false, false),
+    PacketSpec(20, "read_settings", 0, 0, false, true, true, true),
+    PacketSpec(21, "save_settings", 0, 0, false, true, false, false),
+    PacketSpec(22, "load_defaults", 0, 0, false, true, false, false),
+    PacketSpec(32, "move_straight", 10, 10, false, true, false, false),
+    PacketSpec(33, "move_rotate", 10, 10, false, true, false, false),
+    PacketSpec(34, "move_arc", 14, 14, false, true, false, false),
+    PacketSpec(35, "stop", 1, 1, false, true, false, true),
+    PacketSpec(36, "wheel_speeds", 8, 8, false, false, false, false),
+    PacketSpec(37, "line_follow", 6, 6, false, true, false, false),
+    PacketSpec(38, "ir_send", 1, 9, false, true, false, false),
+    PacketSpec(40, "track", 1, 1, false, true, false, false),
+    PacketSpec(39, "read_movements", 0, 0, false, true, true, true),
 ).associateBy { it.type }
 
 /** [PACKET_SPECS] indexed by type (0..255): one array load per frame. */
@@ -2559,8 +2742,11 @@ internal fun decodePacketPayload(type: Int, b: ByteArray, at: Int, end: Int): Pa
     8 -> IrReceived.decode(b, at, end)
     9 -> MovementDone.decode(b, at, end)
     10 -> MovementLog.decode(b, at, end)
+    11 -> Driver.decode(b, at, end)
     16 -> HelloRequest.decode(b, at, end)
     17 -> Heartbeat.decode(b, at, end)
+    23 -> SetRole.decode(b, at, end)
+    24 -> Goodbye.decode(b, at, end)
     18 -> SetSync.decode(b, at, end)
     19 -> UpdateSettings.decode(b, at, end)
     20 -> ReadSettings.decode(b, at, end)
@@ -2590,8 +2776,11 @@ internal fun payloadSizeOf(p: Packet): Int = when (p) {
     is IrReceived -> p.payloadSize
     is MovementDone -> p.payloadSize
     is MovementLog -> p.payloadSize
+    is Driver -> p.payloadSize
     is HelloRequest -> p.payloadSize
     is Heartbeat -> p.payloadSize
+    is SetRole -> p.payloadSize
+    is Goodbye -> p.payloadSize
     is SetSync -> p.payloadSize
     is UpdateSettings -> p.payloadSize
     is ReadSettings -> p.payloadSize
@@ -2620,8 +2809,11 @@ internal fun encodePayloadInto(p: Packet, b: ByteArray, at: Int): Unit = when (p
     is IrReceived -> p.encodeTo(b, at)
     is MovementDone -> p.encodeTo(b, at)
     is MovementLog -> p.encodeTo(b, at)
+    is Driver -> p.encodeTo(b, at)
     is HelloRequest -> p.encodeTo(b, at)
     is Heartbeat -> p.encodeTo(b, at)
+    is SetRole -> p.encodeTo(b, at)
+    is Goodbye -> p.encodeTo(b, at)
     is SetSync -> p.encodeTo(b, at)
     is UpdateSettings -> p.encodeTo(b, at)
     is ReadSettings -> p.encodeTo(b, at)
@@ -2658,7 +2850,7 @@ public class SettingsFieldInfo(
 public val SETTINGS_FIELDS: List<SettingsFieldInfo> = listOf(
     SettingsFieldInfo("identity.robot_id", 0, FieldType.U8, 1, 1.0, 254.0, "", "unique id, also sent in IR messages"),
     SettingsFieldInfo("identity.name", 1, FieldType.CHAR, 16, null, null, "", "user-friendly name"),
-    SettingsFieldInfo("sync.mode", 17, FieldType.U8, 1, 0.0, 2.0, "", "full, reduced or no state packets"),
+    SettingsFieldInfo("sync.mode", 17, FieldType.U8, 1, 0.0, 2.0, "", "none, full or reduced state packets"),
     SettingsFieldInfo("sync.period_ms", 18, FieldType.U16, 1, 1.0, 60000.0, "ms", "period of state packets"),
     SettingsFieldInfo("scheduler.main_period_us", 20, FieldType.U16, 1, 500.0, 20000.0, "us", "period of the main loop tick"),
     SettingsFieldInfo("speed_pid.kp", 22, FieldType.F32, 1, 0.0, 100000.0, "", "proportional gain"),

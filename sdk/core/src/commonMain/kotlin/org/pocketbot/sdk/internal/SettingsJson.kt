@@ -1,6 +1,8 @@
 package org.pocketbot.sdk.internal
 
+import kotlinx.serialization.ExperimentalSerializationApi
 import kotlinx.serialization.json.Json
+import kotlinx.serialization.json.JsonUnquotedLiteral
 import kotlinx.serialization.json.JsonArray
 import kotlinx.serialization.json.JsonElement
 import kotlinx.serialization.json.JsonObject
@@ -12,10 +14,22 @@ import kotlinx.serialization.json.longOrNull
 import org.pocketbot.protocol.FieldType
 import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.SettingsFieldInfo
+import org.pocketbot.sdk.EnumSetting
+import org.pocketbot.sdk.toDecimalString
 
-/** Settings bytes to and from JSON grouped as in the protocol definition (`{"speed_pid": {"kp": 2500.0}}`). */
-internal object SettingsJson {
+/**
+ * Settings bytes to and from JSON grouped as in the protocol definition (`{"speed_pid": {"kp": 2500}}`). A float is
+ * written as the shortest decimal that reads back to it (`0.0004`: a JSON number, exact), an enumeration setting by
+ * its name (`"mode": "full"`; its code is read too). [enums] are the enumeration settings by name.
+ */
+internal class SettingsJson(private val enums: Map<String, EnumSetting<*>>) {
     private val json = Json { prettyPrint = true }
+
+    @OptIn(ExperimentalSerializationApi::class)
+    private fun number(f: SettingsFieldInfo, bytes: ByteArray, at: Int): JsonElement = when (val n = readNumber(bytes, at, f.type)) {
+        is Float -> JsonUnquotedLiteral(n.toDecimalString())
+        else -> JsonPrimitive(n)
+    }
 
     private fun value(f: SettingsFieldInfo, bytes: ByteArray): JsonElement = when {
         f.type == FieldType.CHAR -> {
@@ -23,8 +37,8 @@ internal object SettingsJson {
             while (end < f.offset + f.count && bytes[end] != 0.toByte()) end++
             JsonPrimitive(bytes.decodeToString(f.offset, end))
         }
-        f.count > 1 -> JsonArray(List(f.count) { JsonPrimitive(readNumber(bytes, f.offset + it * f.type.size, f.type)) })
-        else -> JsonPrimitive(readNumber(bytes, f.offset, f.type))
+        f.count > 1 -> JsonArray(List(f.count) { number(f, bytes, f.offset + it * f.type.size) })
+        else -> enums[f.path]?.nameOf(readNumber(bytes, f.offset, f.type).toInt())?.let(::JsonPrimitive) ?: number(f, bytes, f.offset)
     }
 
     fun export(bytes: ByteArray): String {
@@ -57,6 +71,9 @@ internal object SettingsJson {
 
     private fun number(f: SettingsFieldInfo, v: JsonElement): Number {
         val p = v as? JsonPrimitive ?: throw IllegalArgumentException("${f.path} needs a number, not $v")
+        enums[f.path]?.let { e ->
+            if (p.isString) return e.codeOfName(p.content) ?: throw IllegalArgumentException("${f.path} is one of ${e.names.joinToString()}, not $v")
+        }
         if (p.isString) throw IllegalArgumentException("${f.path} needs a number, not $v")
         return if (f.type == FieldType.F32) p.doubleOrNull ?: throw IllegalArgumentException("${f.path} needs a number, not $v")
         else p.longOrNull ?: throw IllegalArgumentException("${f.path} needs an integer, not $v")
@@ -81,15 +98,17 @@ internal object SettingsJson {
         }
     }
 
-    /** [fields] (in struct order) split into runs of adjacent fields of at most 64 bytes each. */
-    fun runs(fields: List<SettingsFieldInfo>): List<List<SettingsFieldInfo>> {
-        val runs = ArrayList<MutableList<SettingsFieldInfo>>()
-        for (f in fields.sortedBy { it.offset }) {
-            val last = runs.lastOrNull()
-            val end = last?.last()?.let { it.offset + it.size }
-            if (last != null && end == f.offset && f.offset + f.size - last.first().offset <= 64) last += f
-            else runs += mutableListOf(f)
+    companion object {
+        /** [fields] (in struct order) split into runs of adjacent fields of at most 64 bytes each. */
+        fun runs(fields: List<SettingsFieldInfo>): List<List<SettingsFieldInfo>> {
+            val runs = ArrayList<MutableList<SettingsFieldInfo>>()
+            for (f in fields.sortedBy { it.offset }) {
+                val last = runs.lastOrNull()
+                val end = last?.last()?.let { it.offset + it.size }
+                if (last != null && end == f.offset && f.offset + f.size - last.first().offset <= 64) last += f
+                else runs += mutableListOf(f)
+            }
+            return runs
         }
-        return runs
     }
 }

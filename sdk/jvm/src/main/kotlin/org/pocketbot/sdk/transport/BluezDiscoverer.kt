@@ -18,6 +18,7 @@ import org.freedesktop.dbus.interfaces.DBusInterface
 import org.freedesktop.dbus.interfaces.ObjectManager
 import org.freedesktop.dbus.interfaces.Properties
 import org.freedesktop.dbus.types.Variant
+import java.io.File
 
 /**
  * Finds PocketBots with Linux's Bluetooth stack, BlueZ, over D-Bus: starts discovery on an adapter
@@ -44,7 +45,8 @@ import org.freedesktop.dbus.types.Variant
  * ```
  *
  * [discover] runs its D-Bus calls on [Dispatchers.IO] and may be collected from any coroutine; cancelling the
- * collection stops discovery. It throws [TransportLostException] when the bus, BlueZ or the adapter is missing.
+ * collection stops discovery. It throws [TransportLostException] when the bus, BlueZ or the adapter is missing (at once
+ * when Linux lists no such adapter in `/sys/class/bluetooth`).
  *
  * @param adapter the adapter's name as BlueZ calls it (`hci0`).
  * @param duration how long to search; [Duration.INFINITE] searches until the collector cancels.
@@ -64,6 +66,10 @@ public class BluezDiscoverer(
     private val adapterPath = "/org/bluez/$adapter"
 
     override fun discover(): Flow<RobotDevice> = channelFlow {
+        // Linux lists its Bluetooth adapters in sysfs: without one, D-Bus need not be asked (it takes seconds to say no).
+        if (busAddress == null && File("/sys/class").isDirectory && !File("/sys/class/bluetooth/$adapter").exists()) {
+            throw TransportLostException("no Bluetooth adapter $adapter on this machine")
+        }
         val events = Channel<Pair<String, Map<String, Variant<*>>>>(Channel.UNLIMITED)
         val connection = connect()
         try {

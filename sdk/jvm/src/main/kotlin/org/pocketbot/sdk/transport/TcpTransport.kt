@@ -82,7 +82,7 @@ public class TcpTransport private constructor(
                 throw e
             } catch (e: Exception) {
                 channel.close()
-                throw TransportLostException("$address: cannot connect: ${e.message ?: e::class.simpleName}", e)
+                throw TransportLostException("$address: ${e.message?.lowercase() ?: e::class.simpleName}", e)
             }
             return TcpTransport(address, SocketStream(channel, loop), context)
         }

@@ -4,10 +4,12 @@ import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.link.LinkSettings
 import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Controller
+import org.pocketbot.sdk.StepSize
 import org.pocketbot.sdk.Tuner
 import kotlin.test.assertEquals
 import kotlin.test.assertNotNull
 import kotlin.test.assertTrue
+import kotlin.time.Duration.Companion.seconds
 
 /** PID tuning on the real firmware: fast reduced samples, a step test's response, the sync mode given back. */
 class TunerIntegrationTest {
@@ -49,6 +51,28 @@ class TunerIntegrationTest {
         assertTrue(top in 0.17..0.25, "cruise at 0.2 m/s, measured up to $top")
         val driven = emu.handleOf(robot).trueWheelDistances.let { (it.leftM + it.rightM) / 2 }
         assertTrue(driven in 0.28..0.32, "the manoeuvre is 30 cm, drove $driven m")
+        robot.close()
+    }
+
+    @Test
+    fun aRobotSpeedStepOfChosenSizeHasTheSetpointOfTheProfileTheRobotBrakesOn() = withEmulator { emu ->
+        val robot = connectAll(emu).single()
+        val tuner = Tuner(robot)
+        tuner.begin()
+        val size = StepSize(speedMps = 0.15, distanceM = 0.2, duration = 1.seconds)
+        assertEquals("drives 0.2 m straight ahead at 0.15 m/s", size.describe(Controller.ROBOT_SPEED))
+        val response = tuner.stepTest(Controller.ROBOT_SPEED, size)
+        tuner.end()
+        val driven = emu.handleOf(robot).trueWheelDistances.let { (it.leftM + it.rightM) / 2 }
+        assertTrue(driven in 0.18..0.22, "the step is 20 cm, drove $driven m")
+        val held = response.samples.filter { it.setpoint != 0.0 }
+        assertEquals(0.15, held.maxOf { it.setpoint }, 1e-9, "the profile cruises at the step's speed")
+        // The profile starts slow and brakes towards the end: the setpoint says so, as the robot's speed does.
+        assertTrue(held.first().setpoint < 0.05, "starts at the profile's minimum speed: ${held.first()}")
+        val braking = held.drop(held.indexOfLast { it.setpoint == 0.15 })
+        assertTrue(braking.last().setpoint < 0.06, "brakes to the profile's minimum speed: ${braking.map { it.setpoint }}")
+        assertTrue(braking.zipWithNext().all { (a, b) -> b.setpoint <= a.setpoint }, "and never speeds up again: ${braking.map { it.setpoint }}")
+        assertTrue(response.rmsError < 0.03, "a setpoint the robot follows: rms error ${response.rmsError} m/s")
         robot.close()
     }
 

@@ -15,8 +15,8 @@ import org.pocketbot.protocol.SlipDecoder
 /**
  * The robot end of a byte link for tests: reads SLIP frames on its own thread, answers a [HelloRequest] with a
  * [Hello] (same seq) and keeps every other frame in [received]. With [answersCommands] it also acknowledges every
- * acknowledged command and answers `read_settings` (the default settings) and `read_movements` (an empty log), enough
- * for the SDK's handshake. Works over any pair of blocking streams: a socket, a pty.
+ * acknowledged command and answers `set_role` (this host drives), `read_settings` (the default settings) and
+ * `read_movements` (an empty log), enough for the SDK's handshake. Works over any pair of blocking streams: a socket, a pty.
  */
 class FakeRobot(
     private val input: InputStream,
@@ -62,6 +62,9 @@ class FakeRobot(
             }
             is org.pocketbot.protocol.ReadMovements ->
                 sendFrame(Frames.encode(org.pocketbot.protocol.MovementLog(0, 0, 0, List(16) { 0 }, List(16) { 0 }, List(16) { 0f }), 0))
+            // A robot no other host drives: this one drives when it asks to.
+            is org.pocketbot.protocol.SetRole ->
+                sendFrame(Frames.encode(org.pocketbot.protocol.Driver(if (packet.role == 0) 0 else 1, 1, packet.label, 0), 0))
             else -> {}
         }
         sendFrame(Frames.encode(org.pocketbot.protocol.Ack(packet.type), seq))

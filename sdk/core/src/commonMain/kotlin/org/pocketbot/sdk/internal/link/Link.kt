@@ -20,27 +20,41 @@ import kotlinx.coroutines.sync.withLock
 import kotlinx.coroutines.withContext
 import kotlinx.coroutines.withTimeoutOrNull
 import org.pocketbot.protocol.Ack
+import org.pocketbot.protocol.Driver
+import org.pocketbot.protocol.DriverChange as WireChange
 import org.pocketbot.protocol.Error
+import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.Goodbye
 import org.pocketbot.protocol.Heartbeat
 import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.HelloRequest
+import org.pocketbot.protocol.HostRole
+import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.ProtocolError
 import org.pocketbot.protocol.ProtocolInfo
+import org.pocketbot.protocol.SetRole
 import org.pocketbot.protocol.SettingsData
 import org.pocketbot.sdk.CommandRefusedException
+import org.pocketbot.sdk.commandName
 import org.pocketbot.sdk.CommandTimeoutException
 import org.pocketbot.sdk.ConnectFailedException
 import org.pocketbot.sdk.ConnectionChange
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugLog
+import org.pocketbot.sdk.DriverChange
+import org.pocketbot.sdk.Driving
 import org.pocketbot.sdk.LinkStats
+import org.pocketbot.sdk.NotDriverException
 import org.pocketbot.sdk.ProtocolMismatchException
+import org.pocketbot.sdk.QueueOnLeave
 import org.pocketbot.sdk.RobotClosedException
+import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotIdentity
 import org.pocketbot.sdk.RobotOptions
+import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.TransportLostException
 import kotlin.coroutines.CoroutineContext
@@ -56,6 +70,10 @@ import kotlin.time.Duration.Companion.milliseconds
  * Two lanes of acknowledged commands: [command] runs one at a time in call order (the robot executes them in the
  * order they were issued), [urgent] (stop) goes out at once, ahead of a command in flight, and first after a
  * reconnect.
+ *
+ * Every session asks the robot for this host's [Role] right after the hello; the robot tells who drives then and
+ * whenever it changes (`driver`), which [driving] and [events] carry. A command that only the driver may send fails
+ * at once ([NotDriverException]) while this host watches.
  */
 internal class Link(
     val device: RobotDevice,
@@ -93,6 +111,17 @@ internal class Link(
     private val closed = CompletableDeferred<Throwable?>()
     val isClosing: Boolean get() = closed.isCompleted
 
+    /** What this host asks for at the next handshake: after a take-over, to drive (not to take it over again). */
+    private var role = options.role
+    private val _driving = MutableStateFlow(Driving.UNKNOWN)
+    val driving: StateFlow<Driving> = _driving.asStateFlow()
+    private val _events = MutableSharedFlow<RobotEvent>(extraBufferCapacity = CHANGE_BUFFER, onBufferOverflow = BufferOverflow.DROP_OLDEST)
+    val events: SharedFlow<RobotEvent> = _events.asSharedFlow()
+    private var driverWaiter: CompletableDeferred<Driver>? = null
+
+    /** Set when what connects this host to the robot said that no link of it is free (`no_free_link`). */
+    private var noFreeLink: Int? = null
+
     private val table = CommandTable()
     private val order = Mutex()
     private var inFlight: PendingCommand? = null
@@ -114,7 +143,9 @@ internal class Link(
         } catch (e: CancellationException) {
             throw e
         } catch (e: Throwable) {
-            throw ConnectFailedException("cannot connect to ${device.name} at ${device.address}: ${e.message}", e)
+            // Transports begin their messages with the address: say it once.
+            val where = if (device.name == device.address) device.address else "${device.name} at ${device.address}"
+            throw ConnectFailedException("cannot connect to $where: ${e.message?.removePrefix("${device.address}: ")}", e)
         }
         scope.launch { supervise(session) }
     }
@@ -126,9 +157,10 @@ internal class Link(
         session.jobs += scope.launch { countTransportDrops(session) }
         try {
             val hello = handshake(session)
+            val driver = claim(session)
             // A stop issued while the link was down goes out before anything else.
             for (p in urgentWaiting.toList()) if (!p.answer.isCompleted) exchange(session, p)
-            client.restore(hello, first) { exchange(session, table.open(it), closeAfter = true) }
+            client.restore(hello, first, driver) { exchange(session, table.open(it), closeAfter = true) }
             resendInFlight(session)
         } catch (e: Throwable) {
             endSession(session, "handshake failed: ${e.message}")
@@ -139,10 +171,97 @@ internal class Link(
         return session
     }
 
+    /**
+     * Asks the robot for this host's role (`set_role`, under [RobotOptions.hostLabel]) and returns its answer: the
+     * `driver` packet it sends before the ack.
+     */
+    private suspend fun claim(session: Session): Driver {
+        val waiter = CompletableDeferred<Driver>()
+        driverWaiter = waiter
+        try {
+            exchange(session, table.open(SetRole(role.wire(), label())), closeAfter = true)
+        } finally {
+            driverWaiter = null
+        }
+        @OptIn(kotlinx.coroutines.ExperimentalCoroutinesApi::class)
+        val driver = if (waiter.isCompleted) waiter.getCompleted() else throw RobotClosedException("the robot acknowledged set_role without saying who drives")
+        if (role == Role.TAKE_OVER) role = Role.DRIVE
+        return driver
+    }
+
+    /**
+     * Asks for [wanted] on the live session as an ordinary command and returns who drives after the robot's answer.
+     * The answer counts for later reconnects too.
+     */
+    suspend fun requestRole(wanted: Role): Driving {
+        role = wanted
+        command(SetRole(wanted.wire(), label()))
+        return serial {
+            if (role == Role.TAKE_OVER) role = Role.DRIVE
+            _driving.value
+        }
+    }
+
+    /** [RobotOptions.hostLabel] as the robot keeps it: its first [LABEL_BYTES] bytes of UTF-8, whole characters. */
+    private fun label(): String {
+        var text = options.hostLabel
+        while (text.encodeToByteArray().size > LABEL_BYTES) text = text.dropLast(1)
+        return text
+    }
+
+    /** The robot told who drives (on its own, or answering): published, and an event when it changed. */
+    private fun driverSaid(p: Driver) {
+        val before = _driving.value
+        val now = Driving(p.role == HostRole.DRIVE.code, p.label.ifEmpty { null }, changeOf(p.change))
+        driverWaiter?.complete(p)
+        if (now == before) return
+        _driving.value = now
+        if (now.byThisHost != before.byThisHost || now.driver != before.driver) {
+            val taken = before.byThisHost && !now.byThisHost && now.driver != null
+            _events.tryEmit(RobotEvent.DriverChanged(now, taken))
+            debugLog.host(if (taken) 1 else 2, "${device.name}: $now" + if (taken) " (taken from this host)" else "")
+        }
+    }
+
+    /** Tells the robot's user of [event] ([events]). */
+    fun emit(event: RobotEvent) {
+        _events.tryEmit(event)
+    }
+
+    /** Fails [packet] at once while this host watches and only the driver may send it. */
+    private fun checkDriving(packet: Packet) {
+        val d = _driving.value
+        if (d.byThisHost || PACKET_SPECS[packet.type]?.watcherOk == true) return
+        throw NotDriverException(identity.value?.name ?: device.name, commandName(packet.type), d.driver)
+    }
+
+    /**
+     * Says goodbye: the robot finishes or drops what this host queued ([queue]), and does not take the closing link
+     * for a lost one. Suspends until the robot acknowledged it, at most a few command timeouts; false when it did
+     * not (no link, no answer): then its failsafe stops what this host drove.
+     */
+    suspend fun leave(queue: QueueOnLeave): Boolean = withContext(context) {
+        val session = current?.takeIf { it.isLive && _connection.value == ConnectionState.Connected } ?: return@withContext false
+        val p = table.open(Goodbye(queue.ordinal))
+        try {
+            exchange(session, p, closeAfter = true)
+            true
+        } catch (e: CancellationException) {
+            throw e
+        } catch (e: Throwable) {
+            debugLog.host(1, "goodbye to ${device.name} not acknowledged: ${e.message}")
+            false
+        }
+    }
+
     /** The command in flight at the loss: sent again with its sequence number unless the robot already holds it. */
     private suspend fun resendInFlight(session: Session) {
         val p = inFlight ?: return
         if (p.answer.isCompleted || !p.wanted()) return
+        if (!_driving.value.byThisHost && PACKET_SPECS[p.packet.type]?.watcherOk != true) {
+            p.answer.completeExceptionally(NotDriverException(identity.value?.name ?: device.name, commandName(p.packet.type), _driving.value.driver))
+            return
+        }
         if (p.everSent && client.alreadyHeld(p.packet)) {
             p.answer.complete(Unit)
             return
@@ -165,6 +284,7 @@ internal class Link(
                 }
                 if (hello != null || !session.isLive) break
             }
+            noFreeLink?.let { throw TransportLostException("all $it host links of ${device.name} are in use by other hosts") }
             if (!session.isLive) throw TransportLostException("link lost during the handshake")
             // A live link that never answers is a timeout (ConnectFailedException carries it as the cause).
             hello ?: throw CommandTimeoutException("hello_request", options.helloAttempts)
@@ -184,13 +304,17 @@ internal class Link(
             session.ended.await()
             if (isClosing) return
             var attempt = 0
+            var waited = Duration.ZERO
+            var wait: Duration? = null
             while (true) {
                 attempt++
                 if (attempt > options.reconnect.maxAttempts) {
                     close(RobotClosedException("gave up reconnecting to ${device.name} after ${attempt - 1} attempts"))
                     return
                 }
-                delay(options.reconnect.delayBefore(attempt))
+                // Quick retries while the robot's failsafe has not stopped it yet, then a growing wait.
+                wait = options.reconnect.nextDelay(waited, wait).also { waited += it }
+                delay(wait)
                 if (isClosing) return
                 setConnection(ConnectionState.Reconnecting(attempt))
                 try {
@@ -205,7 +329,8 @@ internal class Link(
                 } catch (e: CancellationException) {
                     throw e
                 } catch (e: Throwable) {
-                    debugLog.host(1, "reconnect attempt $attempt failed: ${e.message}")
+                    // A line per attempt would be dozens a second while the retries are quick: the first, then ever rarer.
+                    if (attempt and (attempt - 1) == 0) debugLog.host(1, "reconnect attempt $attempt failed: ${e.message}")
                     if (!isClosing) setConnection(ConnectionState.Lost("reconnect attempt $attempt failed: ${e.message}"))
                 }
             }
@@ -287,11 +412,29 @@ internal class Link(
         _changes.tryEmit(ConnectionChange(++changeCount, state))
     }
 
-    /** Closes the link and ends the robot's coroutines; idempotent, from any thread. */
-    fun close(cause: Throwable?) {
+    /**
+     * Closes the link and ends the robot's coroutines; idempotent, from any thread. With [goodbye] a live link first
+     * carries a `goodbye` (the queue finishes), without waiting for its ack: the transport closes once it is sent.
+     */
+    fun close(cause: Throwable?, goodbye: Boolean = false) {
         if (!closed.complete(cause)) return
+        val connected = _connection.value == ConnectionState.Connected
         setConnection(ConnectionState.Closed(cause))
-        current?.transport?.close()
+        val transport = current?.transport
+        if (goodbye && connected && transport != null) {
+            // Outside the robot's scope, which ends now (a job of its own); bounded by a command timeout.
+            CoroutineScope(context + Job()).launch {
+                try {
+                    withTimeoutOrNull(options.commandTimeout) { transport.send(table.open(Goodbye(QueueOnLeave.FINISH.ordinal)).frame) }
+                } catch (e: Throwable) {
+                    // Gone already: the robot's failsafe stops what this host drove.
+                } finally {
+                    transport.close()
+                }
+            }
+        } else {
+            transport?.close()
+        }
         robotJob.cancel()
     }
 
@@ -329,7 +472,13 @@ internal class Link(
             }
             is Error -> {
                 val p = if (packet.seq != 0) table.find(packet.seq, packet.packetType) else null
-                val refusal = CommandRefusedException(packet.packetType, packet.code, packet.detail)
+                val refusal = if (packet.code == ErrorCode.NOT_DRIVER.code) {
+                    val d = _driving.value // told just before, unless that was lost
+                    NotDriverException(identity.value?.name ?: device.name, commandName(packet.packetType), d.driver.takeIf { !d.byThisHost })
+                } else {
+                    CommandRefusedException(packet.packetType, packet.code, packet.detail)
+                }
+                if (packet.code == ErrorCode.NO_FREE_LINK.code) noFreeLink = packet.detail
                 if (p != null) {
                     stats.refused++
                     p.answer.completeExceptionally(refusal)
@@ -339,6 +488,7 @@ internal class Link(
                 }
             }
             is SettingsData -> if (settingsSink?.invoke(packet) != true) stats.unexpected++
+            is Driver -> driverSaid(packet)
             is Hello -> when {
                 helloWaiter != null -> if (seq == helloSeq) helloWaiter?.complete(packet)
                 seq == 0 -> robotReset(packet)
@@ -414,6 +564,7 @@ internal class Link(
         withContext(context) {
             order.withLock {
                 checkOpen()
+                checkDriving(packet)
                 if (!wanted()) throw CommandWithdrawnException(everSent = false)
                 val p = table.open(packet)
                 p.wanted = wanted
@@ -440,6 +591,7 @@ internal class Link(
             }
             if (p.sentIn !== session && !p.answer.isCompleted) {
                 if (!p.wanted()) throw CommandWithdrawnException(p.everSent)
+                if (!p.everSent) checkDriving(p.packet) // the drive may have changed while it waited for the link
                 try {
                     send(session, p)
                 } catch (e: TransportLostException) {
@@ -466,6 +618,7 @@ internal class Link(
      */
     override suspend fun urgent(packet: Packet): Unit = withContext(context) {
         checkOpen()
+        checkDriving(packet)
         val p = table.open(packet)
         urgentWaiting += p
         try {
@@ -498,6 +651,7 @@ internal class Link(
 
     /** Sends an unacknowledged packet if the link is up; false when it is not. */
     override suspend fun sendUnacked(packet: Packet): Boolean = withContext(context) {
+        checkDriving(packet)
         val session = current
         if (session == null || _connection.value != ConnectionState.Connected) return@withContext false
         try {
@@ -543,6 +697,23 @@ internal class Link(
 
     companion object {
         const val CHANGE_BUFFER: Int = 256
+
+        /** The robot keeps this many bytes of a host's label. */
+        const val LABEL_BYTES: Int = 16
+
+        private fun Role.wire(): Int = when (this) {
+            Role.WATCH -> HostRole.WATCH.code
+            Role.DRIVE -> HostRole.DRIVE.code
+            Role.TAKE_OVER -> HostRole.TAKE_OVER.code
+        }
+
+        private fun changeOf(code: Int): DriverChange = when (code) {
+            WireChange.CLAIMED.code -> DriverChange.CLAIMED
+            WireChange.TAKEN_OVER.code -> DriverChange.TAKEN_OVER
+            WireChange.LEFT.code -> DriverChange.LEFT
+            WireChange.LOST.code -> DriverChange.LOST
+            else -> DriverChange.NONE
+        }
     }
 }
 

@@ -1,5 +1,6 @@
 package org.pocketbot.sdk.internal.link
 
+import org.pocketbot.protocol.Driver
 import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.Packet
 import kotlin.time.Duration
@@ -14,10 +15,11 @@ internal interface LinkClient {
 
     /**
      * After the handshake of every session (and after a robot reset), before ordinary commands flow again: bring
-     * the robot and the host's mirror in line (settings, movement handles, sync mode). [exchange] runs one
-     * acknowledged command on this session and throws when it is refused, times out or the session ends.
+     * the robot and the host's mirror in line (settings, movement handles, sync mode). [driver] is the robot's
+     * answer to this host's role (who drives, the robot's time). [exchange] runs one acknowledged command on this
+     * session and throws when it is refused, times out or the session ends.
      */
-    suspend fun restore(hello: Hello, firstSession: Boolean, exchange: suspend (Packet) -> Unit)
+    suspend fun restore(hello: Hello, firstSession: Boolean, driver: Driver, exchange: suspend (Packet) -> Unit)
 
     /** A frame from the robot was lost on the way (and counted in the link stats): a report it carried is missing. */
     fun onFrameDropped()

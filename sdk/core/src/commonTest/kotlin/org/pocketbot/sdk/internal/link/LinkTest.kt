@@ -12,6 +12,7 @@ import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.Ack
 import org.pocketbot.protocol.DebugText
+import org.pocketbot.protocol.Driver
 import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.MoveStraight
 import org.pocketbot.protocol.Packet
@@ -44,7 +45,7 @@ class LinkTest {
             packets += packet
         }
 
-        override suspend fun restore(hello: Hello, firstSession: Boolean, exchange: suspend (Packet) -> Unit) {
+        override suspend fun restore(hello: Hello, firstSession: Boolean, driver: Driver, exchange: suspend (Packet) -> Unit) {
             restores += firstSession
             restoreWith?.let { exchange(it) }
         }
