@@ -154,20 +154,27 @@ public class FirmwareImage internal constructor(
 
         /**
          * Whether a function can call itself, directly or through others: an indirect call may call any function whose
-         * reference is taken (in a table or by code). Without such a cycle the call depth is bounded by the call graph,
-         * and runaway recursion cannot happen.
+         * reference is taken (in a table or by code) and whose type is the one the call names (any other traps), a
+         * call through a typed reference any function whose reference is taken. Without such a cycle the call depth is
+         * bounded by the call graph, and runaway recursion cannot happen.
          */
         internal fun callsCanRecurse(module: WasmModule): Boolean {
             val imported = module.importSection().count(ExternalType.FUNCTION)
             val bodies = module.codeSection().functionBodies()
+            val types = module.typeSection()
             val referenced = (module.elementSection().elements().flatMap { element -> element.initializers().flatten() } +
                 bodies.flatMap { it.instructions() }).filter { it.opcode() == OpCode.REF_FUNC }.map { it.operand(0).toInt() }.toSet()
-            // Callees of each function, by function index; imported functions call nothing of this module.
+            // Imported functions call nothing of this module: whatever their type, they close no cycle.
+            val referencedByType = referenced.filter { it >= imported }
+                .groupBy { types.getType(module.functionSection().getFunctionType(it - imported)) }
+            // Callees of each function, by function index.
             val callees = bodies.map { body ->
                 buildSet {
                     for (i in body.instructions()) when (i.opcode()) {
                         OpCode.CALL, OpCode.RETURN_CALL -> add(i.operand(0).toInt())
-                        OpCode.CALL_INDIRECT, OpCode.RETURN_CALL_INDIRECT, OpCode.CALL_REF, OpCode.RETURN_CALL_REF -> addAll(referenced)
+                        OpCode.CALL_INDIRECT, OpCode.RETURN_CALL_INDIRECT ->
+                            addAll(referencedByType[types.getType(i.operand(0).toInt())].orEmpty())
+                        OpCode.CALL_REF, OpCode.RETURN_CALL_REF -> addAll(referenced)
                         else -> {}
                     }
                 }

@@ -93,6 +93,10 @@ class NativeEngineTest {
         val indirect = wasm("010401600000 03020100 040401700001 0907010041000b0100 0a0901070041001100000b")
         assertTrue(FirmwareImage.callsCanRecurse(Parser.parse(direct)))
         assertTrue(FirmwareImage.callsCanRecurse(Parser.parse(indirect)))
+        // $f (no parameters) calling through the table a function that takes an i32: only $f is there, which would
+        // trap, so nothing can recurse (the firmware's link drivers and packet handlers are such calls).
+        val otherType = wasm("010802600000 60017f00 03020100 040401700001 0907010041000b0100 0a0b010900410041001101000b")
+        assertFalse(FirmwareImage.callsCanRecurse(Parser.parse(otherType)))
         // (func (drop (memory.grow (i32.const 1)))) with a memory.
         val grows = wasm("010401600000 03020100 0503010001 0a09010700410140001a0b")
         assertTrue(FirmwareImage.growsMemory(Parser.parse(grows)))
