@@ -12,7 +12,6 @@ import kotlinx.coroutines.yield
 import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SyncMode
-import kotlin.concurrent.Volatile
 import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.math.sqrt
@@ -173,8 +172,14 @@ public class Tuner(private val robot: Robot) {
     private val commanded = MutableStateFlow<Double?>(null)
     private var before: Pair<SyncMode, Duration>? = null
 
-    /** The movement of a robot speed step test, once the robot has it: the setpoint follows its speed profile. */
-    @Volatile private var profile: SpeedProfile? = null
+    /**
+     * The movement of a robot speed step test, once the robot has it: the setpoint follows its speed profile. A flow
+     * rather than a plain field, because the step test sets it while other threads read the setpoint.
+     */
+    private val profileFlow = MutableStateFlow<SpeedProfile?>(null)
+    private var profile: SpeedProfile?
+        get() = profileFlow.value
+        set(value) { profileFlow.value = value }
 
     /** The step [stepTest] asks of the controller now (its cruise speed, or 0 after it), or null while no step test runs. */
     public val stepSetpoint: StateFlow<Double?> = commanded.asStateFlow()
