@@ -15,7 +15,7 @@
 #   make track       thesis A.3: three robots on a track, the behaviour in their firmware, simulated time
 #   make emulator    run the emulator CLI, e.g. make emulator ARGS="--robots 3"
 #   make jvm         mvn package of the reactor (no tests), after the firmware wasm and native engine
-#   make bench | bench-emulator | profile-emulator | bench-sdk | bench-desktop | fuzz | clean
+#   make bench | bench-emulator | profile-emulator | bench-sdk | bench-bluetooth | bench-desktop | fuzz | clean
 
 MVN       ?= mvn -B
 # The Kotlin daemon would otherwise outlive the build (1-6 GB each).
@@ -35,6 +35,7 @@ TRACK_MAIN          ?= org.pocketbot.examples.TrackDemoKt
 EMULATOR_MAIN       ?= org.pocketbot.emulator.cli.MainKt
 BENCH_EMULATOR_MAIN ?= org.pocketbot.emulator.bench.EmulatorBenchKt
 BENCH_SDK_MAIN      ?= org.pocketbot.bench.SdkBenchKt
+BENCH_BLUETOOTH_MAIN ?= org.pocketbot.bench.BluetoothBenchKt
 PANEL_MAIN          ?= org.pocketbot.desktop.MainKt
 BENCH_DESKTOP_MAIN  ?= org.pocketbot.desktop.bench.DesktopBenchKt
 # Skia draws in software (no GPU on CI or under Xvfb) and unpacks its native library under target/, not ~/.skiko.
@@ -64,7 +65,7 @@ PANEL_STAMP := desktop-app/target/classpath.txt
 cp_of       = $(1)/target/classes:$$(cat $(1)/target/classpath.txt)
 
 .PHONY: all deps firmware wasm protocol-check jvm test publish docs outside-sample run hello push track emulator cli \
-        panel screenshots apk bench bench-emulator profile-emulator bench-sdk bench-desktop fuzz clean
+        panel screenshots apk bench bench-emulator profile-emulator bench-sdk bench-bluetooth bench-desktop fuzz clean
 
 all: jvm
 
@@ -86,7 +87,9 @@ jvm: wasm
 
 # Sequential on purpose (also under make -j): cheap checks first, the long Maven build last.
 # -fae: a failing module still lets the independent ones run, so the log has every count.
+# Bumble (the virtual Bluetooth controllers of the end-to-end tests) goes into a venv of its own, build/bumble.
 test: deps
+	@bash scripts/ensure-bumble.sh >/dev/null
 	$(MAKE) --no-print-directory protocol-check
 	$(MAKE) -C firmware test
 	$(MAKE) -C firmware wasm native-engine
@@ -185,7 +188,7 @@ emulator: wasm
 	@$(MAKE) --no-print-directory $(EMULATOR_CLI_STAMP)
 	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator/cli)" $(EMULATOR_MAIN) $(ARGS)
 
-bench: bench-emulator bench-sdk bench-desktop
+bench: bench-emulator bench-sdk bench-bluetooth bench-desktop
 	$(MAKE) -C firmware bench
 
 bench-emulator: wasm
@@ -207,6 +210,11 @@ profile-emulator: wasm
 bench-sdk: wasm
 	$(MAVEN) package -pl sdk/bench -am -DskipTests -Dpocketbot.jsgate.skip=true
 	$(JAVA) -cp "$(call cp_of,sdk/bench)" $(BENCH_SDK_MAIN) $(ARGS)
+
+# State packets a second over the robot's own Bluetooth (RFCOMM, L2CAP) against its UART. ARGS: seconds per link.
+bench-bluetooth: wasm
+	$(MAVEN) package -pl sdk/bench -am -DskipTests -Dpocketbot.jsgate.skip=true
+	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,sdk/bench)" $(BENCH_BLUETOOTH_MAIN) $(ARGS)
 
 bench-desktop: wasm
 	@$(MAKE) --no-print-directory $(PANEL_STAMP)

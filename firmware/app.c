@@ -11,6 +11,9 @@
 #include "drivers/sensors.h"
 #include "drivers/uart.h"
 #include "hal/hal.h"
+#ifdef LINK_HCI
+#include "bluetooth/bt.h"
+#endif
 #include "modules/comm.h"
 #include "modules/debug.h"
 #include "modules/failsafe.h"
@@ -87,7 +90,11 @@ void app_init(void)
     comm_init(); /* first: the modules register their packet handlers in their inits */
     bool from_eeprom = settings_init();
     uart_init();
+#ifdef LINK_HCI
+    bt_init(); /* the UART carries H4 to the Bluetooth module; the stack opens comm's links as hosts connect */
+#else
     comm_link_open(0, &comm_uart_link); /* a serial link is open from reset: the robot cannot see its host come */
+#endif
     encoder_init();
     motors_init();
     speed_init();
@@ -117,6 +124,9 @@ void app_tick(void)
     line_sensor_task();
     sensors_task();
     proximity_task();
+#ifdef LINK_HCI
+    bt_task();
+#endif
     comm_task();
     failsafe_task();
     line_follower_task();

@@ -12,6 +12,8 @@ PACKAGES=(
   wabt
   # host tools: serial/pty plumbing, protocol generator, BlueZ D-Bus mock for the SDK tests
   socat python3 python3-dbusmock dbus make
+  # the virtual Bluetooth controllers: Bumble in a venv of its own (scripts/ensure-bumble.sh)
+  python3-venv
   # JVM build and the Kotlin/JS test run of sdk/core
   openjdk-17-jdk-headless maven nodejs
   # the control panel's headless UI tests draw text (Skia finds fonts through fontconfig)

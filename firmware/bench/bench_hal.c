@@ -14,7 +14,6 @@ uint32_t bench_us;
 static uint32_t sched_at[HAL_SCHED_CHANNELS];
 static uint8_t sched_armed;
 static uint8_t emitters;
-static uint16_t line_res[HAL_LINE_DETECTORS];
 static uint8_t eeprom[HAL_EEPROM_SIZE];
 int16_t bench_line_spot = 3; /* spot under the line */
 
@@ -82,15 +81,19 @@ void bench_set_line_spot(int16_t spot)
         }
 }
 
+/* The robot starts a sweep with one register write: here the conversion only notes the emitters it saw, and the
+ * results (read in the scheduler's interrupt, outside the tick) are looked up then. */
+static uint8_t converted;
+
 void hal_line_convert(void)
 {
-    uint8_t p = emitters == 0x15u ? 1u : emitters == 0x0Au ? 2u : 0u;
-    memcpy(line_res, line_model[p], sizeof line_res);
+    converted = emitters;
 }
 
 void hal_line_results(uint16_t out[HAL_LINE_DETECTORS])
 {
-    memcpy(out, line_res, sizeof line_res);
+    uint8_t p = converted == 0x15u ? 1u : converted == 0x0Au ? 2u : 0u;
+    memcpy(out, line_model[p], sizeof line_model[p]);
 }
 
 int32_t hal_sensor_read(uint8_t sensor)

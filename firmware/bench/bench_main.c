@@ -8,6 +8,10 @@
  * the track behaviour (thesis A.3) following a robot close ahead while token hand-overs and greetings arrive,
  * then driving round an obstacle; and a stress scenario (full state EVERY tick, IR and host packets every tick,
  * debug text at level 4). Output goes out on UART0 (simavr prints it).
+ * The HCI build (the robot's default, -DLINK_HCI) runs its Bluetooth stack as a task of its own: a host is connected
+ * over RFCOMM before the first scenario (bench_bt.c plays the controller and the host), the state goes to it and its
+ * packets come in UIH frames as fast as the wire carries them; one more scenario streams full state at the rate
+ * the wire can carry (every 12 ms with 27-byte ACL buffers) while the robot moves.
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
@@ -16,6 +20,12 @@
 
 #include "app.h"
 #include "bench.h"
+#ifdef LINK_HCI
+#include "bluetooth/bt.h"
+#include "bluetooth/hci.h"
+#include "bluetooth/l2cap.h"
+#include "bluetooth/rfcomm.h"
+#endif
 #include "core/data.h"
 #include "core/scheduler.h"
 #include "drivers/eeprom.h"
@@ -35,7 +45,11 @@
 #include "modules/track.h"
 
 #define BUDGET 32000ul
+#ifdef LINK_HCI
+#define TASKS 14
+#else
 #define TASKS 11
+#endif
 
 static volatile uint16_t ovf;
 ISR(TIMER1_OVF_vect) { ovf++; }
@@ -87,12 +101,18 @@ static void out_pct(uint32_t c)
     out_s(" %");
 }
 
-typedef void (*task_t)(void);
-static const char *const names[TASKS] = {"speed", "line_sensor", "sensors", "proximity", "comm", "failsafe",
-                                          "line_follower", "track", "locomotion", "eeprom", "reflector"};
-static const task_t tasks[TASKS] = {speed_task, line_sensor_task, sensors_task, proximity_task, comm_task,
-                                    failsafe_task, line_follower_task, track_task, locomotion_task, eeprom_task,
-                                    reflector_task};
+/* The tasks in app_tick()'s order (bt_task()'s three parts each timed), as X(name, function). */
+#ifdef LINK_HCI
+#define BT_TASKS(X) X("bt hci", hci_task) X("bt l2cap", l2cap_task) X("bt rfcomm", rfcomm_task)
+#else
+#define BT_TASKS(X)
+#endif
+#define TASK_LIST(X) X("speed", speed_task) X("line_sensor", line_sensor_task) X("sensors", sensors_task)          \
+    X("proximity", proximity_task) BT_TASKS(X) X("comm", comm_task) X("failsafe", failsafe_task)                  \
+    X("line_follower", line_follower_task) X("track", track_task) X("locomotion", locomotion_task)                \
+    X("eeprom", eeprom_task) X("reflector", reflector_task)
+#define NAME(name, fn) name,
+static const char *const names[TASKS] = {TASK_LIST(NAME)};
 static uint32_t task_max[TASKS];
 static uint16_t task_in_worst[TASKS]; /* each task's share of the worst tick */
 static uint32_t task_sum[TASKS];
@@ -104,20 +124,23 @@ static uint32_t enc_t[2];
 
 /* Host and IR traffic of a scenario: none, what the links can physically carry, or every tick (stress); or the
  * IR of the track behaviour: another robot's beacons and messages, or our own beacon reflected (an obstacle). */
-enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS, CHATTER_TRACK, CHATTER_OBSTACLE };
+enum { CHATTER_NONE, CHATTER_LINKS, CHATTER_STRESS, CHATTER_TRACK, CHATTER_OBSTACLE, CHATTER_HOST };
 #define IR_MESSAGE_MS 42u
 
-/* One tick's tasks with a timer reading between two (a 16-bit read each); the arithmetic comes after the tick, so
- * that the harness adds a few cycles per task instead of a hundred. Not inlined: the harness's cycles between the
- * tasks (the worst tick includes them) would otherwise change with the register pressure of the scenarios' scripts
- * around it (4 more cycles a task, once). */
+/* One tick's tasks with a timer reading between two (a 16-bit read each): called directly, in app_tick()'s order, so
+ * that LTO inlines them into one function as it does into the robot's main loop (a task called through a table is a
+ * function of its own: 50 to 80 cycles more each in saved registers than on the robot). The memory barriers keep
+ * each task's work between its two readings. The arithmetic comes after the tick. Not inlined: the harness's cycles
+ * (the worst tick includes them) would otherwise change with the register pressure of the scenarios' scripts. */
+#define BARRIER() __asm__ __volatile__("" ::: "memory")
 static __attribute__((noinline)) void time_tasks(uint16_t *stamp)
 {
-    stamp[0] = TCNT1;
-    for (uint8_t i = 0; i < TASKS; i++) {
-        tasks[i]();
-        stamp[i + 1] = TCNT1;
-    }
+    BARRIER();
+    *stamp++ = TCNT1;
+    BARRIER();
+#define CALL(name, fn) fn(); BARRIER(); *stamp++ = TCNT1; BARRIER();
+    TASK_LIST(CALL)
+#undef CALL
 }
 
 /* One millisecond: scheduler interrupts in 100 us steps, encoder edges, then the tick, each task timed. */
@@ -170,14 +193,19 @@ static void one_tick(uint8_t moving, uint8_t chatter)
         uint32_t ms = bench_us / 1000u;
         hal_ir_msg_t m = {7, 2, 50, 4, {1, 2, 3, 4, 0, 0, 0, 0}};
         m.data[0] = (uint8_t)bench_us;
-        if (chatter == CHATTER_STRESS || ms % IR_MESSAGE_MS == 0)
+        if (chatter == CHATTER_STRESS || (chatter == CHATTER_LINKS && ms % IR_MESSAGE_MS == 0))
             ir_rx_isr(0, &m);
         m.power = 25;
-        if (chatter == CHATTER_STRESS || ms % IR_MESSAGE_MS == IR_MESSAGE_MS / 2)
-            ir_rx_isr(1, &m);
+        if (chatter == CHATTER_STRESS || (chatter == CHATTER_LINKS && ms % IR_MESSAGE_MS == IR_MESSAGE_MS / 2))
+            ir_rx_isr(1, &m); /* CHATTER_HOST: the host's packets only */
         static const uint8_t hb[] = {0xC0, 0x11, 0x00, 0x00, 0xCF, 0xB8, 0xC0};
+#ifdef LINK_HCI
+        if (bench_bt_idle()) /* as fast as the wire carries them */
+            bench_bt_host_packet(hb, sizeof hb);
+#else
         for (uint8_t i = 0; i < sizeof hb; i++)
             uart_rx_isr(hb[i]);
+#endif
     }
     if (!scheduler_tick_begin())
         return;
@@ -199,9 +227,13 @@ static void one_tick(uint8_t moving, uint8_t chatter)
             task_in_worst[i] = (uint16_t)(stamp[i + 1] - stamp[i]);
     }
     tick_sum += total;
+#ifdef LINK_HCI
+    bench_bt_wire(); /* the controller takes and answers the firmware's bytes, 12 per ms each way */
+#else
     /* Drain the link as a 115200 Bd UART would (12 bytes per ms), keeping room for packets. */
     for (uint8_t i = 0; i < 12; i++)
         uart_tx_isr();
+#endif
 }
 
 static void report(const char *scenario)
@@ -245,8 +277,52 @@ static void run(uint16_t ticks, uint8_t moving, uint8_t chatter)
         one_tick(moving, chatter);
 }
 
+#ifdef LINK_HCI
+void bench_bt_run(uint16_t ticks)
+{
+    run(ticks, 0, CHATTER_NONE);
+}
+
+/* Starts the controller and connects a host over RFCOMM; none of it counts in the scenarios. */
+static void bluetooth_up(void)
+{
+    for (uint8_t i = 0; i < 200 && !hci_ready(); i++)
+        run(1, 0, CHATTER_NONE);
+    bench_bt_connect();
+    out_s(rfcomm_tx_room(0) ? "BENCH: a host is connected over RFCOMM.\n" : "BENCH: FAIL no host connected.\n");
+    memset(task_max, 0, sizeof task_max);
+    memset(task_sum, 0, sizeof task_sum);
+    task_n = 0;
+    tick_max = tick_sum = 0;
+    isr_max = 0;
+}
+#endif
+
+/* Stack painting: the RAM between the static data and the stack is filled with a pattern before anything runs,
+ * and the deepest byte the stack overwrote is found at the end (the bench's own frames, the tasks and the scheduler
+ * interrupts included). */
+#define PAINT 0xA5u
+extern uint8_t __heap_start;
+
+static void paint_stack(void)
+{
+    uint8_t *p = &__heap_start;
+    uint8_t *end = (uint8_t *)SP - 64; /* this function's frame and a margin */
+    while (p < end)
+        *p++ = PAINT;
+}
+
+static uint16_t stack_depth(void)
+{
+    const uint8_t *p = &__heap_start;
+    while (*p == PAINT && p < (const uint8_t *)RAMEND)
+        p++;
+    return (uint16_t)(RAMEND - (uint16_t)p + 1u);
+}
+
 int main(void)
 {
+    paint_stack();
     UBRR0 = 0;
     UCSR0B = (1 << TXEN0);
     TCCR1A = 0;
@@ -256,6 +332,9 @@ int main(void)
     sei();
 
     settings.link.failsafe_timeout_ms = 0;
+#ifdef LINK_HCI
+    bluetooth_up();
+#endif
     run(50, 0, CHATTER_NONE);
     report("idle, full state every 100 ms");
 
@@ -288,6 +367,15 @@ int main(void)
     run(150, 0, CHATTER_OBSTACLE);
     run(250, 1, CHATTER_OBSTACLE);
     report("track: an obstacle ahead, the detour's steps, full state every 100 ms");
+#ifdef LINK_HCI
+    track_command(PB_TRACK_ACTION_STOP);
+    settings.sync.mode = PB_SYNC_MODE_FULL;
+    settings.sync.period_ms = 12;
+    move.id = 4;
+    locomotion_straight(&move, &detail);
+    run(400, 1, CHATTER_HOST);
+    report("Bluetooth: a movement, full state every 12 ms over RFCOMM (what the wire carries), host packets");
+#endif
     uint32_t realistic = worst_tick;
 
     settings.debug.level = 4;
@@ -303,6 +391,11 @@ int main(void)
     out_s("BENCH: scheduler interrupts (line sensor phases, beacons), worst: ");
     out_u(isr_max, 1);
     out_s(" cycles\n");
+    out_s("BENCH: stack at most ");
+    out_u(stack_depth(), 1);
+    out_s(" bytes deep (static RAM ends at ");
+    out_u((uint16_t)&__heap_start - RAMSTART, 1);
+    out_s(" bytes)\n");
     out_s("BENCH: WORST TICK (all but the stress scenario) ");
     out_u(realistic, 1);
     out_s(" cycles =");

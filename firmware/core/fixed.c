@@ -42,6 +42,33 @@ fx_gain_t fx_gain(float x)
     return g;
 }
 
+uint32_t fx_udiv(uint32_t n, uint32_t d)
+{
+    if (d > n)
+        return 0;
+    /* Align d under n's top: whole bytes first (moves on the AVR), then bits. */
+    uint8_t k = 0;
+    while (d <= (n >> 8)) {
+        d <<= 8;
+        k = (uint8_t)(k + 8u);
+    }
+    while (d <= (n >> 1)) {
+        d <<= 1;
+        k++;
+    }
+    uint32_t q = 0;
+    for (;;) {
+        if (n >= d) {
+            n -= d;
+            q |= 1u;
+        }
+        if (k-- == 0)
+            return q;
+        q <<= 1;
+        d >>= 1;
+    }
+}
+
 uint16_t fx_isqrt(uint32_t v)
 {
     uint32_t root = 0;

@@ -8,6 +8,7 @@ typedef struct {
     uint32_t target; /* when the callback is due */
     uint32_t fired;  /* when it last fired (basis of scheduler_again) */
     uint8_t active;
+    uint8_t short_delay; /* armed by scheduler_after_short(): target and fired are not kept */
 } channel_t;
 
 static channel_t channels[HAL_SCHED_CHANNELS];
@@ -62,7 +63,19 @@ void scheduler_after(uint8_t ch, uint32_t delay_us, scheduler_cb_t cb)
     c->cb = cb;
     c->target = hal_micros() + delay_us;
     c->active = 1;
+    c->short_delay = 0;
     hal_sched_arm(ch, delay_us > HAL_SCHED_MAX_DELAY_US ? HAL_SCHED_MAX_DELAY_US : delay_us);
+    hal_irq_restore(s);
+}
+
+void scheduler_after_short(uint8_t ch, uint16_t delay_us, scheduler_cb_t cb)
+{
+    uint8_t s = hal_irq_save();
+    channel_t *c = &channels[ch];
+    c->cb = cb;
+    c->active = 1;
+    c->short_delay = 1;
+    hal_sched_arm(ch, delay_us);
     hal_irq_restore(s);
 }
 
@@ -73,6 +86,7 @@ void scheduler_again(uint8_t ch, uint32_t period_us, scheduler_cb_t cb)
     uint32_t now = hal_micros();
     c->cb = cb;
     c->target = c->fired + period_us;
+    c->short_delay = 0;
     /* After a long stall, restart from now rather than firing a burst of stale events. */
     if ((int32_t)(c->target - now) < -(int32_t)period_us)
         c->target = now + period_us;
@@ -89,6 +103,19 @@ void scheduler_cancel(uint8_t ch)
     hal_irq_restore(s);
 }
 
+/* A long delay's interrupt: due (its time kept for scheduler_again()), or an intermediate wake-up, re-armed. Apart
+ * from scheduler_isr(): the registers it needs were saved in every interrupt of a short delay too. */
+static __attribute__((noinline)) bool long_delay_due(channel_t *c, uint8_t ch)
+{
+    uint32_t now = hal_micros();
+    if ((int32_t)(c->target - now) > 0) {
+        arm(ch, now);
+        return false;
+    }
+    c->fired = c->target;
+    return true;
+}
+
 void scheduler_isr(uint8_t ch)
 {
     if (ch >= HAL_SCHED_CHANNELS)
@@ -96,13 +123,9 @@ void scheduler_isr(uint8_t ch)
     channel_t *c = &channels[ch];
     if (!c->active)
         return;
-    uint32_t now = hal_micros();
-    if ((int32_t)(c->target - now) > 0) { /* an intermediate wake-up of a long delay */
-        arm(ch, now);
+    if (!c->short_delay && !long_delay_due(c, ch))
         return;
-    }
     c->active = 0;
-    c->fired = c->target;
     c->cb();
 }
 

@@ -27,6 +27,12 @@ void scheduler_init(void);
  *  Replaces what was scheduled on `ch`. */
 void scheduler_after(uint8_t ch, uint32_t delay_us, scheduler_cb_t cb);
 
+/** Like scheduler_after() for a delay the timer's compare spans at once (at most HAL_SCHED_MAX_DELAY_US), without
+ *  reading the clock here or when it fires: the cheap way for a driver's short steps (the line sensor's phases, five
+ *  interrupts a tick). A channel armed this way must not be re-armed by scheduler_again(), which needs the time it
+ *  last fired. */
+void scheduler_after_short(uint8_t ch, uint16_t delay_us, scheduler_cb_t cb);
+
 /** Like scheduler_after(), relative to the time the channel last fired: drift-free periodic events. */
 void scheduler_again(uint8_t ch, uint32_t period_us, scheduler_cb_t cb);
 

@@ -51,6 +51,29 @@ bool uart_getc(uint8_t *byte)
     return true;
 }
 
+bool uart_rx_waiting(void)
+{
+    return rx_tail != rx_head;
+}
+
+uint8_t uart_read(uint8_t *dst, uint8_t max)
+{
+    uint8_t t = rx_tail;
+    uint8_t n = 0;
+    uint8_t h = rx_head;
+    while (n < max && t != h) {
+        dst[n++] = rx_buf[t];
+        t = (uint8_t)(t + 1u);
+    }
+    rx_tail = t;
+    return n;
+}
+
+uint8_t uart_tx_backlog(void)
+{
+    return (uint8_t)(tx_head - tx_tail);
+}
+
 uint16_t uart_tx_free(void)
 {
     return (uint8_t)(tx_tail - tx_head - 1u);

@@ -17,6 +17,15 @@ void uart_init(void);
 /** Takes one received byte. \return false when none is waiting. */
 bool uart_getc(uint8_t *byte);
 
+/** \return true when received bytes wait. */
+bool uart_rx_waiting(void);
+
+/** Takes up to `max` received bytes into `dst`. \return how many. */
+uint8_t uart_read(uint8_t *dst, uint8_t max);
+
+/** \return bytes queued for transmission that the interrupt has not sent yet. */
+uint8_t uart_tx_backlog(void);
+
 /** \return the number of bytes that can be queued for transmission now. */
 uint16_t uart_tx_free(void);
 

@@ -120,13 +120,15 @@ void comm_register(uint8_t type, comm_handler_t handler)
 
 /* ---- output ---- */
 
-/* SLIP-encoded bytes on their way to the stream links of `to`. When the UART is the only one (a serial robot with
- * one host) they are written straight into its transmit ring, as fast as a frame can be sent; otherwise into a
- * chunk that is written out to each link as it fills. One at a time: frames never nest. */
+/* SLIP-encoded bytes on their way to the stream links of `to`. When one link is the only one and has a transmit ring
+ * of its own (the UART of a serial robot with one host, an RFCOMM channel) they are written straight into that ring,
+ * as fast as a frame can be sent; otherwise into a chunk that is written out to each link as it fills. One at a
+ * time: frames never nest. */
 #define OUT_CHUNK 32u
 static struct {
     uint8_t to;
-    uint8_t direct; /* buf is the UART's transmit ring */
+    uint8_t direct; /* buf is the transmit ring of link `ring` */
+    uint8_t ring;
     uint8_t pos;    /* where the next byte goes in buf */
     uint8_t *buf;
     uint8_t chunk[OUT_CHUNK + 2]; /* one more byte and its escape fit after a chunk's worth */
@@ -135,17 +137,27 @@ static struct {
 static inline void out_begin(uint8_t to)
 {
     out.to = to;
-    out.direct = to == 1u && links[0].drv == &comm_uart_link;
-    out.buf = out.direct ? uart_tx_buf : out.chunk;
-    out.pos = out.direct ? uart_tx_begin() : 0;
+    out.direct = 0;
+    out.buf = out.chunk;
+    out.pos = 0;
+    if (to == 0 || (to & (uint8_t)(to - 1u)))
+        return; /* no link, or several */
+    uint8_t k = 0;
+    while (k < COMM_LINKS - 1u && !(to & BIT(k)))
+        k++;
+    const comm_link_driver_t *d = links[k].drv;
+    if (d != NULL && d->tx_ring != NULL) {
+        out.direct = 1;
+        out.ring = k;
+        out.buf = d->tx_ring(k, &out.pos);
+    }
 }
 
-/* Hands on what was written: published to the UART's interrupt at once, or the chunk written to each link. */
+/* Hands on what was written: published to the link's ring at once, or the chunk written to each link. */
 static void out_flush(void)
 {
     if (out.direct) {
-        uart_tx_commit(out.pos);
-        uart_tx_flush();
+        links[out.ring].drv->tx_commit(out.ring, out.pos);
         return;
     }
     uint8_t bit = 1;
@@ -364,7 +376,11 @@ static bool frame_out(uint8_t to, uint8_t must, uint8_t type, uint8_t seq, const
     out_payload = p;
     out_len = len;
     uint16_t framed_size = (uint16_t)(sizeof head + len + PB_FRAME_CRC_SIZE);
-    uint8_t ok = with_room(to, framed_size, (uint16_t)(2u * framed_size + 2u), frame_exact);
+    uint16_t worst = (uint16_t)(2u * framed_size + 2u);
+    /* A serial robot with one host asks its UART alone, as comm_send_streamed() does. */
+    uint8_t ok = to == 1u && links[0].drv == &comm_uart_link && uart_tx_free() >= worst
+                     ? 1u
+                     : with_room(to, framed_size, worst, frame_exact);
     if (!ok || (ok & must) != must)
         return false;
     robot_state.errors.tx_dropped += count_bits(to & (uint8_t)~ok);
@@ -853,8 +869,15 @@ void comm_link_rx(uint8_t link, const uint8_t *p, uint16_t n)
         return;
     }
     slip_decoder_t *rx = &links[link].rx;
-    while (n-- && links[link].drv != NULL)
-        rx_byte(link, rx, *p++);
+    while (n && links[link].drv != NULL) {
+        uint16_t k = slip_decode_plain(rx, p, n); /* the frame's body in bulk, its ENDs and escapes one by one */
+        p += k;
+        n = (uint16_t)(n - k);
+        if (n) {
+            rx_byte(link, rx, *p++);
+            n--;
+        }
+    }
 }
 
 /* The links whose received bytes comm_task() takes: each with rx_take, a batch at a time. */
@@ -925,8 +948,22 @@ static void uart_write(uint8_t link, const uint8_t *p, uint16_t n)
     uart_tx_flush();
 }
 
+static uint8_t *uart_ring(uint8_t link, uint8_t *pos)
+{
+    (void)link;
+    *pos = uart_tx_begin();
+    return uart_tx_buf;
+}
+
+static void uart_commit(uint8_t link, uint8_t pos)
+{
+    (void)link;
+    uart_tx_commit(pos);
+    uart_tx_flush();
+}
+
 /* Its received bytes are read by comm_task() itself, while it is link 0 (rx_take NULL). */
-const comm_link_driver_t comm_uart_link = {false, uart_room, uart_write, NULL};
+const comm_link_driver_t comm_uart_link = {false, uart_room, uart_write, NULL, uart_ring, uart_commit};
 
 void comm_task(void)
 {
@@ -935,7 +972,8 @@ void comm_task(void)
         uint8_t b;
         while (budget && uart_getc(&b)) {
             budget--;
-            rx_byte(0, &links[0].rx, b);
+            if (!slip_take_plain(&links[0].rx, b)) /* a frame's body without a call a byte */
+                rx_byte(0, &links[0].rx, b);
         }
     }
     if (polled_links)

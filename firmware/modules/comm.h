@@ -64,6 +64,11 @@ typedef struct {
     /** Optional: copies up to `max` received stream bytes into `p` and returns how many, for comm_task() to take
      *  in every tick; NULL when the link's provider hands them over itself with comm_link_rx(). */
     uint8_t (*rx_take)(uint8_t link, uint8_t *p, uint8_t max);
+    /** Optional (NULL: every byte goes through tx_write): the stream link's transmit ring of 256 bytes, indexed by
+     *  one byte, into which comm SLIP-encodes a frame for this link alone without a copy, once tx_room said it fits.
+     *  Returns the ring and sets `*pos` to where the next byte goes; tx_commit() publishes the bytes up to `pos`. */
+    uint8_t *(*tx_ring)(uint8_t link, uint8_t *pos);
+    void (*tx_commit)(uint8_t link, uint8_t pos);
 } comm_link_driver_t;
 
 /** The UART (a serial cable-replacement module, the emulator's first link) as a stream link. */

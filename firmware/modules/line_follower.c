@@ -32,15 +32,21 @@ static int32_t to_umps(float v)
     return (int32_t)(v * UM_PER_M + 0.5f); /* settings keep speeds in 0..1 m/s */
 }
 
-static void refresh_params(void)
+/* The conversion when settings changed: float arithmetic, a call that saves every register. */
+static __attribute__((noinline)) void params_changed(void)
 {
-    if (k.gen == settings_generation)
-        return;
     k.gen = settings_generation;
     pid_gains_convert(&k.pid, &settings.line_pid, 1.0f, MM_PER_M);
     k.black = to_umps(settings.line_follow.speed_mps);
     k.red = to_umps(settings.line_follow.red_speed_mps);
     k.blue = to_umps(settings.line_follow.blue_speed_mps);
+}
+
+/* The test of every tick, inline: the conversion apart. */
+static inline __attribute__((always_inline)) void refresh_params(void)
+{
+    if (k.gen != settings_generation)
+        params_changed();
 }
 
 static uint8_t on_line_follow(const pb_frame_t *cmd, uint16_t *detail)

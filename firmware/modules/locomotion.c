@@ -90,10 +90,9 @@ static struct {
     int32_t vmin;           /* profile.min_speed_mps, um/s */
 } k;
 
-static void refresh_params(void)
+/* The conversion when settings changed: float arithmetic, a call that saves every register. */
+static __attribute__((noinline)) void params_changed(void)
 {
-    if (k.gen == settings_generation)
-        return;
     k.gen = settings_generation;
     pid_gains_convert(&k.speed, &settings.speed_pid, UM_PER_M, 1.0f);
     pid_gains_convert(&k.wheel, &settings.wheel_pid, UM_PER_M, 1.0f);
@@ -103,6 +102,13 @@ static void refresh_params(void)
     k.decel = fx_gain(p->decel_mps2);
     k.brake = fx_gain(2.0f * p->decel_mps2 * UM_PER_M / (float)(1ul << (2 * BRAKE_SHIFT)));
     k.vmin = (int32_t)(p->min_speed_mps * UM_PER_M + 0.5f);
+}
+
+/* The test of every tick, inline: the conversion apart. */
+static inline __attribute__((always_inline)) void refresh_params(void)
+{
+    if (k.gen != settings_generation)
+        params_changed();
 }
 
 static uint8_t mode(void)
@@ -291,11 +297,12 @@ static float done_value(float scale, int32_t done_um)
     return scale * (float)done_um;
 }
 
-/* Progress of the movement with this frame along its faster wheel, um, now. (Not speed_positions_um():
- * movement_step() is its only caller, so that it stays inlined in the per-tick path.) */
+/* Progress of the movement with this frame along its faster wheel, um, now. */
 static int32_t progress_um(int32_t sl0, int32_t sr0, int16_t pl, int16_t pr)
 {
-    return fx_frac(speed_position_um(0) - sl0, pl) + fx_frac(speed_position_um(1) - sr0, pr);
+    int32_t sl, sr;
+    speed_positions_um(&sl, &sr);
+    return fx_frac(sl - sl0, pl) + fx_frac(sr - sr0, pr);
 }
 
 /* Time to coast `d` um from `v` um/s, Q14 seconds, at most COAST_MAX_Q14. */
@@ -474,8 +481,12 @@ static void start_next(void)
     act.running = 1;
     act.braking = 0;
     act.stopping = 0;
-    act.sl0 = chain ? end_l : speed_position_um(0);
-    act.sr0 = chain ? end_r : speed_position_um(1);
+    if (chain) {
+        act.sl0 = end_l;
+        act.sr0 = end_r;
+    } else {
+        speed_positions_um(&act.sl0, &act.sr0);
+    }
     act.vmin = k.vmin < m->v ? k.vmin : m->v;
     uint32_t vq = (uint32_t)act.vmin >> BRAKE_SHIFT;
     act.vmin_sq = vq * vq;

@@ -21,3 +21,19 @@ void pid_reset(pid_state_t *s)
     s->primed = 0;
 }
 
+/* Out of line: inlined into each of its four callers it took 5 kB of flash, for about 150 cycles a call saved. */
+int32_t pid_update(pid_state_t *s, const pid_gains_t *g, int32_t e, int32_t out_limit)
+{
+    e = fx_clamp(e, PID_ERROR_LIMIT);
+    int32_t u = fx_mul(e, &g->kp);
+    if (g->ki.m) {
+        s->i = fx_clamp(fx_add(s->i, fx_mul(e, &g->ki)), g->i_limit);
+        u = fx_add(u, s->i);
+    }
+    if (g->kd.m && s->primed)
+        u = fx_add(u, fx_mul(e - s->prev, &g->kd)); /* both within +-2^30: no overflow */
+    s->prev = e;
+    s->primed = 1;
+    return fx_clamp(u, out_limit);
+}
+

@@ -41,20 +41,7 @@ void pid_gains_convert(pid_gains_t *out, const pb_pid_t *g, float err_per_si, fl
 void pid_reset(pid_state_t *s);
 
 /** One controller step. \param e the error \param out_limit output clamp, Q16 (>= 0)
- *  \return the clamped output, Q16. Inlined: a call costs a third of a step on the AVR. */
-FX_INLINE int32_t pid_update(pid_state_t *s, const pid_gains_t *g, int32_t e, int32_t out_limit)
-{
-    e = fx_clamp(e, PID_ERROR_LIMIT);
-    int32_t u = fx_mul(e, &g->kp);
-    if (g->ki.m) {
-        s->i = fx_clamp(fx_add(s->i, fx_mul(e, &g->ki)), g->i_limit);
-        u = fx_add(u, s->i);
-    }
-    if (g->kd.m && s->primed)
-        u = fx_add(u, fx_mul(e - s->prev, &g->kd)); /* both within +-2^30: no overflow */
-    s->prev = e;
-    s->primed = 1;
-    return fx_clamp(u, out_limit);
-}
+ *  \return the clamped output, Q16. */
+int32_t pid_update(pid_state_t *s, const pid_gains_t *g, int32_t e, int32_t out_limit);
 
 #endif

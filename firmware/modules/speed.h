@@ -18,7 +18,7 @@ void speed_task(void);
 int32_t speed_umps(uint8_t wheel);
 /** \return the distance `wheel` travelled since reset in um (signed), extrapolated within a pulse. */
 int32_t speed_position_um(uint8_t wheel);
-/** Both wheels' speed_position_um() at the same instant. */
+/** Both wheels' speed_position_um() at the same instant (the cheaper: both computed in one call). */
 void speed_positions_um(int32_t *left, int32_t *right);
 
 /**

@@ -112,14 +112,20 @@ static struct {
     int32_t speed, half, boosted; /* um/s */
 } k;
 
-static void refresh_params(void)
+/* The conversion when settings changed: float arithmetic, a call that saves every register. */
+static __attribute__((noinline)) void params_changed(void)
 {
-    if (k.gen == settings_generation)
-        return;
     k.gen = settings_generation;
     k.speed = (int32_t)(settings.track.speed_mps * UM_PER_M + 0.5f);
     k.half = k.speed / 2;
     k.boosted = k.speed + k.speed / 100 * settings.track.token_boost_percent;
+}
+
+/* The test of every tick, inline: the conversion apart. */
+static inline __attribute__((always_inline)) void refresh_params(void)
+{
+    if (k.gen != settings_generation)
+        params_changed();
 }
 
 /* The distance class of the robot heard in front, NONE if none. */

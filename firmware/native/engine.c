@@ -11,8 +11,9 @@
  * JNI entry point that made the call and becomes a Java exception; the instance stays memory-safe and isolated.
  *
  * How wasm2c's code is built for it (the firmware Makefile): bounds checks in code against the memory's constant size
- * ENGINE_MEMORY_BYTES (no guard pages, whose SIGSEGV handler would take the JVM's), no call depth count. Both rest
- * on what the emulator checks before it runs firmware natively (FirmwareImage): no memory.grow, no recursion.
+ * ENGINE_MEMORY_BYTES (no guard pages, whose SIGSEGV handler would take the JVM's), which rests on what the emulator
+ * checks before it runs firmware natively (FirmwareImage: no memory.grow), and a call depth count per thread
+ * (call_depth.h) in place of the guard page that would catch runaway recursion.
  *
  * Threads: robots are stepped on several threads, each robot on one at a time; the trap target is per thread, the
  * function type registry is filled once, when the library loads.
@@ -38,8 +39,9 @@
 #error "ENGINE_MEMORY_BYTES (the firmware's linear memory size, which never changes) must be defined"
 #endif
 
-/* initial-exec: a plain %fs-relative access, no call (the library's static TLS is these 8 bytes). */
+/* initial-exec: a plain %fs-relative access, no call (the library's static TLS is these 12 bytes). */
 static __thread jmp_buf *trap_target __attribute__((tls_model("initial-exec")));
+__thread uint32_t engine_call_depth __attribute__((tls_model("initial-exec")));
 
 /* Not wasm traps: the C heap could not hold a new instance; the module's memory is not the one the bounds checks
  * were compiled for. */
@@ -158,13 +160,15 @@ static void throw_trap(JNIEnv *env, int code)
 }
 
 /* Runs `call` with traps caught: a trap longjmps back here and is thrown as a Java exception. A local that `call`
- * sets is volatile (setjmp's rule), though after a trap only the exception counts. */
+ * sets is volatile (setjmp's rule), though after a trap only the exception counts. Calls in never nest: the depth
+ * starts from 0 (a trap left it where it was). */
 #define GUARDED(env, call)                                                                                             \
     do {                                                                                                               \
         jmp_buf guard;                                                                                                 \
         int trapped = setjmp(guard);                                                                                   \
         if (trapped == 0) {                                                                                            \
             trap_target = &guard;                                                                                      \
+            engine_call_depth = 0;                                                                                     \
             call;                                                                                                      \
         } else {                                                                                                       \
             throw_trap(env, trapped);                                                                                  \

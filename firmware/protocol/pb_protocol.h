@@ -23,7 +23,7 @@
 #define PB_FW_MAJOR 0
 #define PB_FW_MINOR 1
 #define PB_FW_PATCH 0
-#define PB_LAYOUT_HASH 0x14AF42C3UL
+#define PB_LAYOUT_HASH 0x746D77FAUL
 #define PB_FRAME_HEADER_SIZE 3
 #define PB_FRAME_CRC_SIZE 2
 #define PB_MAX_PAYLOAD 120
@@ -475,13 +475,21 @@ typedef struct PB_PACKED {
     uint16_t rejected; /**< frames with a sound CRC that were refused, for any reason */
     uint16_t rx_overflow; /**< received bytes lost: to a full receive buffer, or by the UART itself (an overrun, or a frame error whose byte is dropped) */
     uint16_t tx_dropped; /**< packets not sent because the transmit buffer was full */
+    uint16_t bt_wire; /**< Bluetooth HCI build: H4 packets from the controller that broke the wire's framing (bad packet type, ACL longer than announced, a packet cut off) */
+    uint16_t bt_timeouts; /**< Bluetooth HCI build: commands the controller did not answer within 1 s */
+    uint16_t bt_resets; /**< Bluetooth HCI build: controller resets after a wire error, a timeout or a hardware error (links were dropped and are accepted again) */
+    uint16_t bt_dropped; /**< Bluetooth HCI build: received L2CAP PDUs dropped (longer than the MTU, out of order, for no open channel, or arriving while an answer waited for room) */
 } pb_state_errors_t;
-PB_STATIC_ASSERT(sizeof(pb_state_errors_t) == 10, "pb_state_errors_t size");
+PB_STATIC_ASSERT(sizeof(pb_state_errors_t) == 18, "pb_state_errors_t size");
 PB_STATIC_ASSERT(offsetof(pb_state_errors_t, crc) == 0, "pb_state_errors_t.crc offset");
 PB_STATIC_ASSERT(offsetof(pb_state_errors_t, framing) == 2, "pb_state_errors_t.framing offset");
 PB_STATIC_ASSERT(offsetof(pb_state_errors_t, rejected) == 4, "pb_state_errors_t.rejected offset");
 PB_STATIC_ASSERT(offsetof(pb_state_errors_t, rx_overflow) == 6, "pb_state_errors_t.rx_overflow offset");
 PB_STATIC_ASSERT(offsetof(pb_state_errors_t, tx_dropped) == 8, "pb_state_errors_t.tx_dropped offset");
+PB_STATIC_ASSERT(offsetof(pb_state_errors_t, bt_wire) == 10, "pb_state_errors_t.bt_wire offset");
+PB_STATIC_ASSERT(offsetof(pb_state_errors_t, bt_timeouts) == 12, "pb_state_errors_t.bt_timeouts offset");
+PB_STATIC_ASSERT(offsetof(pb_state_errors_t, bt_resets) == 14, "pb_state_errors_t.bt_resets offset");
+PB_STATIC_ASSERT(offsetof(pb_state_errors_t, bt_dropped) == 16, "pb_state_errors_t.bt_dropped offset");
 
 /** All module settings, mirrored host -> robot. */
 typedef struct PB_PACKED {
@@ -538,7 +546,7 @@ typedef struct PB_PACKED {
     pb_state_track_t track; /**< The track behaviour (thesis A.3). */
     pb_state_errors_t errors; /**< Link error counters since reset. */
 } pb_robot_state_t;
-PB_STATIC_ASSERT(sizeof(pb_robot_state_t) == 97, "pb_robot_state_t size");
+PB_STATIC_ASSERT(sizeof(pb_robot_state_t) == 105, "pb_robot_state_t size");
 PB_STATIC_ASSERT(offsetof(pb_robot_state_t, time) == 0, "pb_robot_state_t.time offset");
 PB_STATIC_ASSERT(offsetof(pb_robot_state_t, encoders) == 12, "pb_robot_state_t.encoders offset");
 PB_STATIC_ASSERT(offsetof(pb_robot_state_t, wheels) == 20, "pb_robot_state_t.wheels offset");
@@ -585,9 +593,9 @@ PB_STATIC_ASSERT(offsetof(pb_hello_t, settings_crc) == 31, "pb_hello_t.settings_
 typedef struct PB_PACKED {
     pb_robot_state_t state; /**< robot state */
 } pb_state_full_t;
-PB_STATIC_ASSERT(sizeof(pb_state_full_t) == 97, "pb_state_full_t size");
+PB_STATIC_ASSERT(sizeof(pb_state_full_t) == 105, "pb_state_full_t size");
 PB_STATIC_ASSERT(offsetof(pb_state_full_t, state) == 0, "pb_state_full_t.state offset");
-#define PB_STATE_FULL_SIZE 97
+#define PB_STATE_FULL_SIZE 105
 
 /** Encoders, wheel speeds and line position, sent every sync period in reduced mode. */
 typedef struct PB_PACKED {

@@ -3,7 +3,7 @@
 
 const PB_FLASH pb_packet_info_t pb_packet_info[PB_PACKET_INFO_COUNT] = {
     {PB_PKT_HELLO, 33, 33, PB_DIR_R2H, 0, 0, 0},
-    {PB_PKT_STATE_FULL, 97, 97, PB_DIR_R2H, 0, 0, 0},
+    {PB_PKT_STATE_FULL, 105, 105, PB_DIR_R2H, 0, 0, 0},
     {PB_PKT_STATE_REDUCED, 19, 19, PB_DIR_R2H, 0, 0, 0},
     {PB_PKT_ACK, 1, 1, PB_DIR_R2H, 0, 0, 0},
     {PB_PKT_ERROR, 5, 5, PB_DIR_R2H, 0, 0, 0},

@@ -52,6 +52,23 @@ slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte)
     return SLIP_NONE;
 }
 
+uint16_t slip_decode_plain(slip_decoder_t *d, const uint8_t *p, uint16_t n)
+{
+    if (d->ended || d->escaped || d->broken)
+        return 0;
+    uint8_t room = (uint8_t)(sizeof d->buf - d->len);
+    uint8_t *dst = d->buf + d->len;
+    uint16_t k = 0;
+    while (k < n && k < room) {
+        uint8_t b = p[k];
+        if (b == SLIP_END || b == SLIP_ESC)
+            break;
+        dst[k++] = b;
+    }
+    d->len = (uint8_t)(d->len + k);
+    return k;
+}
+
 uint16_t slip_encoded_size(const uint8_t *frame, uint16_t n)
 {
     uint16_t size = (uint16_t)(n + 2u);

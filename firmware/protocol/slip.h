@@ -6,6 +6,7 @@
 #ifndef SLIP_H
 #define SLIP_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "pb_protocol.h"
@@ -45,6 +46,20 @@ void slip_decoder_init(slip_decoder_t *d);
  *  \return SLIP_FRAME when END completes a frame (buf, len valid until the next call), SLIP_ERROR when it
  *  completes a broken one (slip_seen() and `overflow` tell how long it was and why, until the next call). */
 slip_result_t slip_decode(slip_decoder_t *d, uint8_t byte);
+
+/** Takes `byte` when slip_decode() would only append it to the frame (a plain byte inside a sound frame), without
+ *  the call. \return true if it did; else the byte is slip_decode()'s */
+static inline bool slip_take_plain(slip_decoder_t *d, uint8_t byte)
+{
+    if (byte == SLIP_END || byte == SLIP_ESC || d->ended || d->escaped || d->broken || d->len >= sizeof d->buf)
+        return false;
+    d->buf[d->len++] = byte;
+    return true;
+}
+
+/** Takes the bytes of `p` that slip_decode() would only append to the frame (plain bytes inside a sound frame), in
+ *  one loop instead of a call each; stops at the first byte that needs slip_decode(). \return how many it took */
+uint16_t slip_decode_plain(slip_decoder_t *d, const uint8_t *p, uint16_t n);
 
 /** \return the size of `frame` once SLIP-encoded, both ENDs included. */
 uint16_t slip_encoded_size(const uint8_t *frame, uint16_t n);

@@ -42,6 +42,13 @@ void suite_scheduler(void);
 void suite_track(void);
 void suite_links(void);
 
+/* The Bluetooth stack's suites (bt_tests: the stack below comm, with tests/bt_wire.c as its controller). */
+void suite_bt_h4(void);
+void suite_bt_hci(void);
+void suite_bt_l2cap(void);
+void suite_bt_sdp(void);
+void suite_bt_rfcomm(void);
+
 /** Writes the golden frames (SLIPped) as fuzz corpus files into `dir`. */
 void golden_write_corpus(const char *dir);
 

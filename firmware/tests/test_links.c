@@ -441,7 +441,7 @@ static void framed_write(uint8_t link, const uint8_t *p, uint16_t n)
     }
 }
 
-static const comm_link_driver_t framed_driver = {true, framed_room, framed_write, NULL};
+static const comm_link_driver_t framed_driver = {true, framed_room, framed_write, NULL, NULL, NULL};
 
 static void framed_send(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
 {

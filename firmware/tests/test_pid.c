@@ -97,6 +97,49 @@ static void extreme_inputs_saturate_instead_of_wrapping(void)
     CHECK(u == -FX_MAX, "full negative swing %d", u);
 }
 
+/* fx_mul() against the exact product, floored and saturated, for every exponent a gain can have. */
+static void products_are_exact_for_every_exponent(void)
+{
+    uint32_t x = 1;
+    for (int e = -70; e <= 40; e++) {
+        for (int j = 0; j < 40; j++) {
+            x = x * 1103515245u + 12345u;
+            fx_gain_t g = fx_gain(ldexpf(1.0f + (float)(x >> 9) / 8388608.0f, e));
+            for (int i = 0; i < 60; i++) {
+                x = x * 1103515245u + 12345u;
+                int32_t a = (int32_t)(x ^ (x << 13)) >> (i % 31);
+                if (i == 0)
+                    a = INT32_MIN;
+                unsigned __int128 p = (unsigned __int128)(a < 0 ? -(int64_t)a : a) * g.m;
+                unsigned __int128 q = g.s >= 0 ? p >> g.s : p << -g.s;
+                int64_t exact = q > FX_MAX ? FX_MAX : (int64_t)q;
+                int32_t r = fx_mul(a, &g);
+                if (r != (a < 0 ? -exact : exact)) {
+                    CHECK(0, "%d * %u / 2^%d = %d, exact %lld", a, g.m, g.s, r, (long long)(a < 0 ? -exact : exact));
+                    return;
+                }
+            }
+        }
+    }
+}
+
+static void divisions_are_exact(void)
+{
+    uint32_t x = 7;
+    for (int i = 0; i < 200000; i++) {
+        x = x * 1103515245u + 12345u;
+        uint32_t n = x ^ (x << 7), d = (x >> (i % 32)) | 1u;
+        if (i % 7 == 0)
+            n = 0xFFFFFFFFu >> (i % 5);
+        if (fx_udiv(n, d) != n / d) {
+            CHECK(0, "%u / %u = %u, fx_udiv says %u", n, d, n / d, fx_udiv(n, d));
+            return;
+        }
+    }
+    CHECK(fx_udiv(0xFFFFFFFFu, 1) == 0xFFFFFFFFu && fx_udiv(5, 0xFFFFFFFFu) == 0 && fx_udiv(0x80000000u, 0x80000000u) == 1,
+          "edges");
+}
+
 static void fixed_point_helpers_saturate(void)
 {
     fx_gain_t huge = fx_gain(1.0e30f), one = fx_gain(1.0f), tiny = fx_gain(1.0e-30f);
@@ -145,4 +188,6 @@ void suite_pid(void)
     RUN(integral_and_output_are_clamped);
     RUN(extreme_inputs_saturate_instead_of_wrapping);
     RUN(fixed_point_helpers_saturate);
+    RUN(products_are_exact_for_every_exponent);
+    RUN(divisions_are_exact);
 }

@@ -82,10 +82,71 @@ static void corrupted_escapes_drop_the_frame(void)
           "escapes decode");
 }
 
+/* Feeds `p` as comm does: plain bytes in bulk, the others one by one; counts the frames and errors. */
+static void feed_bulk(slip_decoder_t *d, const uint8_t *p, uint16_t n, int *frames, int *errors, uint16_t *sum)
+{
+    while (n) {
+        uint16_t k = slip_decode_plain(d, p, n);
+        p += k;
+        n = (uint16_t)(n - k);
+        if (!n)
+            break;
+        slip_result_t r = slip_decode(d, *p++);
+        n--;
+        *frames += r == SLIP_FRAME;
+        *errors += r == SLIP_ERROR;
+        if (r != SLIP_NONE)
+            *sum = (uint16_t)(*sum * 31u + slip_seen(d) + (r == SLIP_FRAME ? d->buf[d->len - 1] : d->overflow));
+    }
+}
+
+static void bulk_decoding_agrees_with_byte_by_byte(void)
+{
+    uint8_t stream[3000];
+    uint32_t x = 12345;
+    for (unsigned i = 0; i < sizeof stream; i++) { /* ENDs, escapes (sound and broken) and runs past a frame */
+        x = x * 1103515245u + 12345u;
+        uint8_t r = (uint8_t)(x >> 24);
+        stream[i] = r < 6 ? SLIP_END : r < 10 ? SLIP_ESC : r < 14 ? SLIP_ESC_END : (uint8_t)(x >> 16);
+    }
+    for (unsigned chunk = 1; chunk <= 200; chunk += 37) {
+        slip_decoder_t a, b;
+        slip_decoder_init(&a);
+        slip_decoder_init(&b);
+        int fa = 0, ea = 0, fb = 0, eb = 0;
+        uint16_t sa = 0, sb = 0;
+        for (unsigned i = 0; i < sizeof stream; i++) {
+            slip_result_t r = slip_decode(&a, stream[i]);
+            fa += r == SLIP_FRAME;
+            ea += r == SLIP_ERROR;
+            if (r != SLIP_NONE)
+                sa = (uint16_t)(sa * 31u + slip_seen(&a) + (r == SLIP_FRAME ? a.buf[a.len - 1] : a.overflow));
+        }
+        for (unsigned i = 0; i < sizeof stream; i += chunk)
+            feed_bulk(&b, stream + i, (uint16_t)(sizeof stream - i < chunk ? sizeof stream - i : chunk), &fb, &eb, &sb);
+        CHECK(fa == fb && ea == eb && sa == sb && fa > 10 && ea > 10,
+              "chunks of %u: %d frames, %d errors byte by byte; %d, %d in bulk", chunk, fa, ea, fb, eb);
+    }
+    /* And a byte at a time through slip_take_plain() first, as comm reads its UART. */
+    slip_decoder_t a, c;
+    slip_decoder_init(&a);
+    slip_decoder_init(&c);
+    for (unsigned i = 0; i < sizeof stream; i++) {
+        slip_result_t ra = slip_decode(&a, stream[i]);
+        slip_result_t rc = slip_take_plain(&c, stream[i]) ? SLIP_NONE : slip_decode(&c, stream[i]);
+        if (ra != rc || slip_seen(&a) != slip_seen(&c)) {
+            CHECK(0, "byte %u: %d, seen %u byte by byte; %d, seen %u taken plain first", i, ra, slip_seen(&a), rc,
+                  slip_seen(&c));
+            return;
+        }
+    }
+}
+
 void suite_slip(void)
 {
     RUN(split_stream_gives_one_frame);
     RUN(merged_frames_and_empty_frames);
     RUN(oversized_frame_is_dropped_and_the_next_one_survives);
     RUN(corrupted_escapes_drop_the_frame);
+    RUN(bulk_decoding_agrees_with_byte_by_byte);
 }

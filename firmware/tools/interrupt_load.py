@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The worst main loop tick with the interrupt load of the robot's real configuration.
 
-    interrupt_load.py BENCH ISR LOAD [BUDGET]
+    interrupt_load.py BENCH ISR LOAD [BUDGET [--not-met BUILD]]
 
 BENCH: the cycle bench's output (each scenario's worst tick, no interrupts); ISR: bench/isr_bench.c's cycles of each
 interrupt handler (`isr <vector> <name> worst <c> mean <c>`); LOAD: the XMEGA model's interrupts in each mode
@@ -11,18 +11,21 @@ A mode's interrupt load is its interrupts per second times their mean cycles, a 
 much longer while they come (its cycles / (1 - share)): the worst tick with interrupts. As a bound, the busiest
 millisecond: each vector's most interrupts in a millisecond at its mean cost, plus the one handler whose worst call
 exceeds its mean the most, all in one tick. Prints both per scenario and the worst of all but the stress scenario;
-with BUDGET (cycles), fails when that is over it.
+with BUDGET (cycles), fails when that is over it. With --not-met BUILD, a build known to miss the budget (recorded
+in firmware/README.md), it says so in one line instead of failing.
 """
 import re
 import sys
 
 MODES = [("idle", "idle"), ("movement", "movement"), ("line following", "line_following"),
-         ("teleoperation", "teleoperation"), ("track", "track"), ("stress", "teleoperation")]
+         ("teleoperation", "teleoperation"), ("track", "track"), ("Bluetooth", "bluetooth"),
+         ("stress", "teleoperation")]
 
 
 def main():
     bench, isr, load = (open(path).read() for path in sys.argv[1:4])
     budget = int(sys.argv[4]) if len(sys.argv) > 4 else None
+    not_met = sys.argv[6] if len(sys.argv) > 6 and sys.argv[5] == "--not-met" else None
     cost = {int(m[0]): (m[1], int(m[2]), int(m[3]))
             for m in re.findall(r"isr (\d+) (\S+) worst (\d+) mean (\d+)", isr)}
     rates = {}
@@ -45,7 +48,10 @@ def main():
             worst = max(worst, total)
     print(f"WORST TICK WITH INTERRUPTS (all but the stress scenario) {worst} cycles = {worst / 320:.1f} % "
           f"of the 1 ms budget (goal <= 25 %)")
-    if budget is not None and worst > budget:
+    if budget is not None and worst > budget and not_met:
+        print(f"{not_met} build over its cycle budget: {worst / 320:.1f} % of {budget / 320:.0f} % "
+              f"(not met, see firmware/README.md)")
+    elif budget is not None and worst > budget:
         sys.exit(f"FAIL: worst tick with interrupts {worst} cycles, over the budget of {budget}")
 
 

@@ -349,7 +349,7 @@ static uint8_t sim_link_take(uint8_t link, uint8_t *p, uint8_t max)
     return n;
 }
 
-static const comm_link_driver_t sim_link_driver = {false, sim_link_room, sim_link_write, sim_link_take};
+static const comm_link_driver_t sim_link_driver = {false, sim_link_room, sim_link_write, sim_link_take, NULL, NULL};
 
 /* The receive interrupt of a link; a full ring loses the byte (the emulator delivers at the baud rate, and the
  * main loop empties the ring every tick, so it never fills). */
@@ -368,6 +368,11 @@ static void sim_link_rx(int32_t link, uint8_t byte)
 
 static void sim_link_open(int32_t link, bool open)
 {
+#ifdef LINK_HCI
+    (void)link; /* the UART is the Bluetooth module's, and comm's links are the stack's: nothing for the emulator */
+    (void)open;
+    return;
+#endif
     if (link < 0 || link >= (int32_t)COMM_LINKS || !irq_enabled)
         return;
     sim_link[link].rx_head = sim_link[link].rx_tail = sim_link[link].tx_head = sim_link[link].tx_tail = 0;

@@ -170,7 +170,20 @@ uint32_t hal_micros(void)
     return sched_ticks() << 1;
 }
 
-static register16_t *const sched_cc[4] = {&TCC0.CCA, &TCC0.CCB, &TCC0.CCC, &TCC0.CCD};
+/* Per channel: its compare register, interrupt flag and level field (tables: on the AVR a shift by a variable count
+ * is a loop, and every scheduler interrupt re-arms a channel). */
+static const struct {
+    register16_t *cc;
+    uint8_t flag;  /* TC0_CCxIF_bm */
+    uint8_t level; /* the channel's INTCTRLB field, TC0_CCxINTLVL_gm */
+} sched_ch[4] = {
+    {&TCC0.CCA, TC0_CCAIF_bm, TC0_CCAINTLVL_gm},
+    {&TCC0.CCB, TC0_CCBIF_bm, TC0_CCBINTLVL_gm},
+    {&TCC0.CCC, TC0_CCCIF_bm, TC0_CCCINTLVL_gm},
+    {&TCC0.CCD, TC0_CCDIF_bm, TC0_CCDINTLVL_gm},
+};
+/* The medium level in every 2-bit field (TC_CCxINTLVL_MED_gc = 2 << 2x), masked to one channel's field. */
+#define SCHED_LEVEL_MED 0xAAu
 
 void hal_sched_arm(uint8_t ch, uint32_t delay_us)
 {
@@ -179,11 +192,11 @@ void hal_sched_arm(uint8_t ch, uint32_t delay_us)
     /* Relative to the count now: no 32-bit time here (the absolute time it compared once wrapped at another point
      * than hal_micros()). A few ticks at least, so that the count has not passed the compare value already. */
     uint16_t ticks = delay_us < 8u ? 4u : delay_us >= 2ul * 0xFFF0u ? 0xFFF0u : (uint16_t)((delay_us + 1u) >> 1);
+    uint8_t level = sched_ch[ch].level;
     uint8_t s = hal_irq_save();
-    *sched_cc[ch] = (uint16_t)(TCC0.CNT + ticks);
-    TCC0.INTFLAGS = (uint8_t)(TC0_CCAIF_bm << ch);
-    uint8_t shift = (uint8_t)(2 * ch);
-    TCC0.INTCTRLB = (uint8_t)((TCC0.INTCTRLB & ~(3u << shift)) | (TC_CCAINTLVL_MED_gc << shift));
+    *sched_ch[ch].cc = (uint16_t)(TCC0.CNT + ticks);
+    TCC0.INTFLAGS = sched_ch[ch].flag;
+    TCC0.INTCTRLB = (uint8_t)((TCC0.INTCTRLB & ~level) | (level & SCHED_LEVEL_MED));
     hal_irq_restore(s);
 }
 
@@ -192,13 +205,13 @@ void hal_sched_disarm(uint8_t ch)
     if (ch >= HAL_SCHED_CHANNELS)
         return;
     uint8_t s = hal_irq_save();
-    TCC0.INTCTRLB = (uint8_t)(TCC0.INTCTRLB & ~(3u << (2 * ch)));
+    TCC0.INTCTRLB = (uint8_t)(TCC0.INTCTRLB & ~sched_ch[ch].level);
     hal_irq_restore(s);
 }
 
-static void sched_fire(uint8_t ch)
+static inline __attribute__((always_inline)) void sched_fire(uint8_t ch)
 {
-    TCC0.INTCTRLB = (uint8_t)(TCC0.INTCTRLB & ~(3u << (2 * ch))); /* one shot */
+    TCC0.INTCTRLB = (uint8_t)(TCC0.INTCTRLB & ~sched_ch[ch].level); /* one shot */
     scheduler_isr(ch);
 }
 
@@ -488,18 +501,24 @@ void hal_line_convert(void)
     ADCA.CTRLA = ADC_ENABLE_bm | ADC_CH0START_bm | ADC_CH1START_bm | ADC_CH2START_bm | ADC_CH3START_bm;
 }
 
-/* The sweep is done by then (hal.h: within 100 us); signed single-ended results 0..2047 as 12 bits. */
+/* A signed single-ended result 0..2047 as 12 bits. */
+static inline __attribute__((always_inline)) uint16_t line_result(int16_t r)
+{
+    return r < 0 ? 0u : (uint16_t)(r << 1);
+}
+
+/* The sweep is done by then (hal.h: within 100 us). The four results in registers, not an array on the stack (a
+ * scheduler interrupt's work three times a tick). */
 void hal_line_results(uint16_t out[HAL_LINE_DETECTORS])
 {
-    int16_t r[HAL_LINE_DETECTORS];
     uint8_t s = hal_irq_save(); /* the 16-bit reads share ADCA's TEMP register */
-    r[0] = (int16_t)ADCA.CH0.RES;
-    r[1] = (int16_t)ADCA.CH1.RES;
-    r[2] = (int16_t)ADCA.CH2.RES;
-    r[3] = (int16_t)ADCA.CH3.RES;
+    int16_t r0 = (int16_t)ADCA.CH0.RES, r1 = (int16_t)ADCA.CH1.RES, r2 = (int16_t)ADCA.CH2.RES,
+            r3 = (int16_t)ADCA.CH3.RES;
     hal_irq_restore(s);
-    for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++)
-        out[d] = r[d] < 0 ? 0u : (uint16_t)(r[d] << 1);
+    out[0] = line_result(r0);
+    out[1] = line_result(r1);
+    out[2] = line_result(r2);
+    out[3] = line_result(r3);
 }
 
 static void colour_poll(void);

@@ -2,7 +2,8 @@
  * \file test_load.c
  * Interrupts per second in each mode of the robot, on the model with the real configuration: the HAL's own
  * (timers, ADC, TWI, USARTs) and those the world brings (encoder edges at the wheels' speed, host bytes, IR from
- * another robot), as the cycle bench's scenarios have them. Prints `LOAD: <mode> <vector> <per second> <most in a
+ * another robot), as the cycle bench's scenarios have them; "bluetooth" is the USART's load of the HCI build's Bluetooth
+ * scenario (the H4 wire busy both ways: the host's packets back to back, full state every 12 ms). Prints `LOAD: <mode> <vector> <per second> <most in a
  * millisecond>` lines: `make bench` weighs them with the ISRs' measured cycles (bench/isr_bench.c).
  */
 #include <avr/io.h>
@@ -20,9 +21,13 @@
 
 #define BAUD 115200u
 
+enum { HOST_NONE, HOST_HEARTBEATS, HOST_WIRE_RATE };
+
 typedef struct {
     const char *name;
-    bool moving, host, ir;
+    bool moving;
+    uint8_t host;
+    bool ir;
 } mode_t;
 
 /* About 140 mm/s: an edge every 5 ms on each wheel (as the bench). */
@@ -34,13 +39,16 @@ static void wheels_turn(uint64_t from, uint64_t to)
     }
 }
 
-/* A heartbeat from the host every millisecond (7 bytes: what 115200 Bd carries besides the replies). */
-static void host_talks(uint64_t from, uint64_t to)
+/* A heartbeat from the host every millisecond (7 bytes: what 115200 Bd carries besides the replies), or back to
+ * back (every byte the wire carries). */
+static void host_talks(uint64_t from, uint64_t to, uint8_t how)
 {
     uint8_t frame[PB_MAX_FRAME], slip[2 * PB_MAX_FRAME];
     uint16_t n = slip_encode(slip, frame, pb_frame_encode(frame, PB_PKT_HEARTBEAT, 0, NULL, 0));
-    for (uint64_t t = from; t < to; t += XM_MS(1))
-        xm_usart_send(XM_USARTC0, slip, n, BAUD, t);
+    for (uint64_t t = from; t < to;) {
+        uint64_t end = xm_usart_send(XM_USARTC0, slip, n, BAUD, t);
+        t = how == HOST_WIRE_RATE ? end : t + XM_MS(1);
+    }
 }
 
 /* Another robot's messages on both receivers, back to back as its link allows (9-bit frames: 11 bits, 2400 Bd). */
@@ -58,7 +66,7 @@ static void load(const mode_t *m, uint32_t *total)
     if (m->moving)
         wheels_turn(t0, t1);
     if (m->host)
-        host_talks(t0, t1);
+        host_talks(t0, t1, m->host);
     if (m->ir)
         ir_heard(t0, t1);
     xm_irq_clear_counts();
@@ -76,11 +84,12 @@ static void load(const mode_t *m, uint32_t *total)
 static void interrupts_per_second_in_each_mode(void)
 {
     static const mode_t modes[] = {
-        {"idle", false, false, false},
-        {"movement", true, false, false},
-        {"line_following", true, false, false},
-        {"teleoperation", true, true, true},
-        {"track", true, false, true},
+        {"idle", false, HOST_NONE, false},
+        {"movement", true, HOST_NONE, false},
+        {"line_following", true, HOST_NONE, false},
+        {"teleoperation", true, HOST_HEARTBEATS, true},
+        {"track", true, HOST_NONE, true},
+        {"bluetooth", true, HOST_WIRE_RATE, false},
     };
     robot_boot();
     settings.link.failsafe_timeout_ms = 0;
@@ -103,6 +112,11 @@ static void interrupts_per_second_in_each_mode(void)
             settings.sync.mode = PB_SYNC_MODE_FULL;
             settings.sync.period_ms = 100;
             track_command(PB_TRACK_ACTION_START);
+        } else if (i == 5) {
+            track_command(PB_TRACK_ACTION_STOP);
+            settings.sync.period_ms = 12;
+            pb_move_straight_t move = {2, 10.0f, 0.15f};
+            locomotion_straight(&move, &detail);
         }
         uint32_t total;
         load(m, &total);
@@ -116,7 +130,7 @@ static void interrupts_per_second_in_each_mode(void)
         CHECK(adc == 0, "%s: %u ADC interrupts a second", m->name, adc);
         CHECK(xm_irq_count(TWIC_TWIM_vect_num) <= 1400, "%s: %u TWI interrupts a second", m->name,
               xm_irq_count(TWIC_TWIM_vect_num));
-        uint32_t links = m->host ? 12000u + 7000u : 1500u;
+        uint32_t links = m->host == HOST_WIRE_RATE ? 2u * 11520u : m->host ? 12000u + 7000u : 1500u;
         CHECK(total <= 6200u + 1400u + 2 * 480u + links, "%s: %u interrupts a second", m->name, total);
     }
     CHECK(xm_misuse_count() == 0, "the model saw: %s", xm_misuse_last());

@@ -21,34 +21,38 @@ static uint16_t packet(uint8_t *out, uint8_t type, uint8_t seq, const void *payl
     return slip_encode(out, frame, n);
 }
 
-/* Sends set_sync (an acked command) with `seq`: \return whether its ack came back within 20 ms */
-static bool acked(uint8_t seq)
+/* Sends an acked command with `seq`: \return whether its ack came back within 20 ms */
+static bool command_acked(uint8_t type, uint8_t seq, const void *payload, uint8_t len)
 {
     uint8_t bytes[2 * PB_MAX_FRAME + 2];
-    pb_set_sync_t sync = {PB_SYNC_MODE_FULL, 100};
-    uint16_t n = packet(bytes, PB_PKT_SET_SYNC, seq, &sync, sizeof sync);
+    uint16_t n = packet(bytes, type, seq, payload, len);
     robot_frames_clear();
     robot_run_until(xm_usart_send(XM_USARTC0, bytes, n, BAUD, xm_now()) + XM_MS(20));
     for (uint32_t k = 0; robot_frame(PB_PKT_ACK, k); k++)
-        if (robot_frame(PB_PKT_ACK, k)->payload[0] == PB_PKT_SET_SYNC)
+        if (robot_frame(PB_PKT_ACK, k)->payload[0] == type)
             return true;
     return false;
 }
 
-/* The host asks to drive (set_role): only the driving host may change the robot (set_sync among it). */
-static void drive(void)
+/* The host takes the drive (set_role), so that its commands are the driver's. */
+static bool drives(void)
 {
-    uint8_t bytes[2 * PB_MAX_FRAME + 2];
-    pb_set_role_t role = {.role = PB_HOST_ROLE_DRIVE, .label = "test@xmega"};
-    uint16_t n = packet(bytes, PB_PKT_SET_ROLE, 100, &role, sizeof role);
-    robot_run_until(xm_usart_send(XM_USARTC0, bytes, n, BAUD, xm_now()) + XM_MS(20));
+    pb_set_role_t role = {PB_HOST_ROLE_DRIVE, "xmega test"};
+    return command_acked(PB_PKT_SET_ROLE, 100, &role, sizeof role);
+}
+
+/* Sends set_sync (an acked command, the driver's) with `seq`: \return whether its ack came back */
+static bool acked(uint8_t seq)
+{
+    pb_set_sync_t sync = {PB_SYNC_MODE_FULL, 100};
+    return command_acked(PB_PKT_SET_SYNC, seq, &sync, sizeof sync);
 }
 
 static void packets_go_both_ways_at_the_baud_rate(void)
 {
     robot_boot();
     robot_run_us(20000);
-    drive();
+    CHECK(drives(), "the host drives");
     CHECK(acked(1), "set_sync acked");
     robot_run_us(300000); /* full states every 100 ms */
     double bit = xm_usart_bit_cycles(XM_USARTC0);
@@ -68,7 +72,7 @@ static void overruns_and_frame_errors_are_counted_and_survived(void)
     robot_boot();
     settings.link.failsafe_timeout_ms = 0;
     robot_run_us(20000);
-    drive();
+    CHECK(drives(), "the host drives");
     uint16_t lost = robot_state.errors.rx_overflow;
     /* 30 bytes arrive while interrupts stay masked for 1 ms: the receiver holds three, the rest overrun. */
     uint8_t noise[30];

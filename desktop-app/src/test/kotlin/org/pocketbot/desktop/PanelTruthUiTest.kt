@@ -197,8 +197,13 @@ class PanelTruthUiTest {
 
             // The robot's link goes down and stays down: the SDK tries again and again.
             robot.emulated!!.disconnectLink()
+            // During an attempt the state is Reconnecting, between attempts Lost with the failed attempt's number.
             await("many attempts failed", { robot.robot.connection.value }) {
-                (robot.robot.connection.value as? ConnectionState.Reconnecting)?.let { it.attempt >= 6 } ?: false
+                when (val c = robot.robot.connection.value) {
+                    is ConnectionState.Reconnecting -> c.attempt >= 6
+                    is ConnectionState.Lost -> (Regex("reconnect attempt (\\d+)").find(c.reason)?.groupValues?.get(1)?.toInt() ?: 0) >= 6
+                    else -> false
+                }
             }
             val failures = onAllNodes(hasTestTag("console-line") and hasText("link is down", substring = true)).fetchSemanticsNodes()
             assertEquals(1, failures.size, "one line for the repeated failure, not one per attempt")

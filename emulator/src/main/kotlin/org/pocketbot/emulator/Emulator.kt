@@ -303,14 +303,24 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         stopTcp()
         try {
             for ((i, h) in robots.withIndex()) h.startTcp(if (basePort == 0) 0 else basePort + i, listen)
-            if (controlPort < 0) return -1
-            val cp = ControlPort(listen, controlPort) { robots }
-            this.controlPort = cp
-            return cp.port
+            return startControlPort(controlPort, listen) { it.tcpPort }
         } catch (e: java.io.IOException) {
             stopTcp()
             throw e
         }
+    }
+
+    /**
+     * Opens only the control port (see emulator/README.md) on [listen]:[controlPort] (0: any free port, -1: none),
+     * listing for each robot the TCP port [portOf] names: for robots reached some other way than [startTcp], such as
+     * the Bluetooth gateway's RFCOMM endpoints. Returns the port's number, or -1. [stopTcp] closes it.
+     */
+    public fun startControlPort(controlPort: Int, listen: InetAddress, portOf: (RobotHandle) -> Int): Int {
+        if (controlPort < 0) return -1
+        this.controlPort?.close()
+        val cp = ControlPort(listen, controlPort, { robots }, portOf)
+        this.controlPort = cp
+        return cp.port
     }
 
     /** Closes every TCP endpoint and the control port; hosts connected over TCP lose the link. */
@@ -373,7 +383,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     override fun close() {
         stop()
         stopTcp()
-        for (h in robots) h.sim.links.dropConnections("emulator closed")
+        for (h in robots) { h.detachH4(); h.sim.links.dropConnections("emulator closed") }
         // Under the lock: a loop thread that outlived stop()'s wait is between steps when the firmware goes.
         synchronized(lock) {
             closed = true

@@ -1,5 +1,6 @@
 package org.pocketbot.emulator
 
+import org.pocketbot.emulator.bluetooth.H4Uart
 import org.pocketbot.emulator.link.LinkSettings
 import org.pocketbot.emulator.transport.InProcessDevice
 import org.pocketbot.emulator.transport.InProcessTransport
@@ -156,6 +157,23 @@ public class RobotHandle internal constructor(
     }
 
     internal fun closeTcp() { synchronized(this) { tcp?.close(); tcp = null } }
+
+    private var h4: H4Uart? = null
+
+    /**
+     * Wires this robot's UART to the Bluetooth controller at [controller], an H4 byte stream on TCP (a
+     * [org.pocketbot.emulator.bluetooth.VirtualBluetooth] controller, or Bumble's HCI bridge in front of a real
+     * dongle): for a robot running the HCI firmware ([org.pocketbot.emulator.firmware.FirmwareImage.compiledHci]).
+     * The UART then belongs to the controller: hosts reach the robot over Bluetooth, not over [startTcp] or
+     * [openTransport]. The link model ([link]) is the wire between the two: its faults are faults on the H4 wire.
+     */
+    public fun attachH4(controller: InetSocketAddress): Unit = synchronized(this) {
+        check(h4 == null) { "robot $id is wired to a controller already" }
+        h4 = H4Uart(sim.link, controller, "robot-$id")
+    }
+
+    /** Unwires the UART from its controller (see [attachH4]). */
+    public fun detachH4(): Unit = synchronized(this) { h4?.close(); h4 = null }
 
     override fun toString(): String = "robot $id"
 

@@ -125,6 +125,7 @@ class DeterminismAndFaultsTest {
             // Each command acknowledged exactly once (the handshake's set_role has an ack of its own).
             val acked = host.received.filter { it.second is Ack }.map { it.first }
             assertEquals(seqs, acked.filter { it in seqs })
+            assertEquals(acked.distinct(), acked)
             assertEquals(0, robot.state().errors.crc)
         }
     }

@@ -4,7 +4,6 @@ import com.dylibso.chicory.runtime.Instance
 import com.dylibso.chicory.runtime.Machine
 import com.dylibso.chicory.wasm.Parser
 import com.dylibso.chicory.wasm.WasmModule
-import com.dylibso.chicory.wasm.types.ExternalType
 import com.dylibso.chicory.wasm.types.OpCode
 import com.sun.management.HotSpotDiagnosticMXBean
 import java.lang.management.ManagementFactory
@@ -72,6 +71,7 @@ public class FirmwareImage internal constructor(
 
     public companion object {
         private const val COMPILED_CLASS = "org.pocketbot.emulator.firmware.FirmwareModule"
+        private const val COMPILED_HCI_CLASS = "org.pocketbot.emulator.firmware.HciFirmwareModule"
 
         /** The wasm the compiled class was made from, which the native engine must have been built from too. */
         private const val COMPILED_WASM = "pocketbot.wasm"
@@ -96,18 +96,29 @@ public class FirmwareImage internal constructor(
          * (emulator/README.md, "Performance").
          */
         @JvmOverloads
-        public fun compiled(engine: FirmwareEngine? = null): FirmwareImage {
+        public fun compiled(engine: FirmwareEngine? = null): FirmwareImage = compiled(COMPILED_CLASS, COMPILED_WASM, engine)
+
+        /**
+         * The HCI build of the firmware (firmware/build/wasm/pocketbot-hci.wasm, compiled at build time like
+         * [compiled]): its UART carries H4 to a Bluetooth controller and hosts reach it over Bluetooth
+         * (see [org.pocketbot.emulator.RobotHandle.attachH4]). Runs on Chicory: the native engine is built from the
+         * serial firmware only. Throws [IllegalStateException] when the emulator was built without it.
+         */
+        public fun compiledHci(): FirmwareImage = compiled(COMPILED_HCI_CLASS, "pocketbot-hci.wasm", null)
+
+        private fun compiled(className: String, wasm: String, engine: FirmwareEngine?): FirmwareImage {
             val cls = try {
-                Class.forName(COMPILED_CLASS)
+                Class.forName(className)
             } catch (e: ClassNotFoundException) {
                 throw IllegalStateException(
-                    "the emulator was built without the firmware: run `make -C firmware wasm`, then rebuild the emulator", e,
+                    "the emulator was built without firmware/build/wasm/$wasm: run `make -C firmware wasm`, then rebuild the emulator", e,
                 )
             }
             val module = cls.getMethod("load").invoke(null) as WasmModule
             val create = cls.getMethod("create", Instance::class.java)
             val machines = Function<Instance, Machine> { instance -> create.invoke(null, instance) as Machine }
-            val wanted = engine ?: System.getProperty(ENGINE_PROPERTY)?.let { name ->
+            val nativeBuilt = wasm == COMPILED_WASM // the native engine is built from that firmware only
+            val wanted = if (!nativeBuilt) FirmwareEngine.CHICORY else engine ?: System.getProperty(ENGINE_PROPERTY)?.let { name ->
                 FirmwareEngine.entries.firstOrNull { it.name.equals(name, ignoreCase = true) }
                     ?: throw IllegalArgumentException("-D$ENGINE_PROPERTY=$name: not one of native, chicory")
             }
@@ -120,11 +131,12 @@ public class FirmwareImage internal constructor(
             }
             report(when {
                 chosen == FirmwareEngine.NATIVE -> "the firmware runs natively (${(NativeEngine.status as NativeEngine.Loaded).from})"
+                !nativeBuilt -> "the firmware $wasm runs on Chicory (the native engine is built from $COMPILED_WASM only)"
                 why == null -> "the firmware runs on Chicory, as asked"
                 else -> "the firmware runs on Chicory (JVM bytecode), not natively: $why"
             })
             if (chosen == FirmwareEngine.CHICORY) hugeMethodsChecked
-            return FirmwareImage(module, machines, "compiled:$COMPILED_CLASS", chosen)
+            return FirmwareImage(module, machines, "compiled:$className", chosen)
         }
 
         /** Why the native engine cannot run the compiled firmware; null when it can. Found out once per JVM. */
@@ -140,57 +152,12 @@ public class FirmwareImage internal constructor(
                 return@lazy "${library.from} was built from another firmware (wasm SHA-256 ${library.wasmSha256.take(12)}, " +
                     "this emulator's ${sha.take(12)}): rebuild both with make"
             }
-            // What the native engine's build leaves out (firmware/Makefile): growing memory, and a call depth count.
-            val module = Parser.parse(wasm)
-            when {
-                growsMemory(module) -> "the firmware can grow its memory, which the native engine does not do"
-                callsCanRecurse(module) -> "the firmware's calls can recurse, which the native engine does not guard against"
-                else -> null
-            }
+            // What the native engine's build leaves out (firmware/Makefile): growing memory.
+            if (growsMemory(Parser.parse(wasm))) "the firmware can grow its memory, which the native engine does not do" else null
         }
 
         internal fun growsMemory(module: WasmModule): Boolean =
             module.codeSection().functionBodies().any { body -> body.instructions().any { it.opcode() == OpCode.MEMORY_GROW } }
-
-        /**
-         * Whether a function can call itself, directly or through others: an indirect call may call any function whose
-         * reference is taken (in a table or by code) and whose type is the one the call names (any other traps), a
-         * call through a typed reference any function whose reference is taken. Without such a cycle the call depth is
-         * bounded by the call graph, and runaway recursion cannot happen.
-         */
-        internal fun callsCanRecurse(module: WasmModule): Boolean {
-            val imported = module.importSection().count(ExternalType.FUNCTION)
-            val bodies = module.codeSection().functionBodies()
-            val types = module.typeSection()
-            val referenced = (module.elementSection().elements().flatMap { element -> element.initializers().flatten() } +
-                bodies.flatMap { it.instructions() }).filter { it.opcode() == OpCode.REF_FUNC }.map { it.operand(0).toInt() }.toSet()
-            // Imported functions call nothing of this module: whatever their type, they close no cycle.
-            val referencedByType = referenced.filter { it >= imported }
-                .groupBy { types.getType(module.functionSection().getFunctionType(it - imported)) }
-            // Callees of each function, by function index.
-            val callees = bodies.map { body ->
-                buildSet {
-                    for (i in body.instructions()) when (i.opcode()) {
-                        OpCode.CALL, OpCode.RETURN_CALL -> add(i.operand(0).toInt())
-                        OpCode.CALL_INDIRECT, OpCode.RETURN_CALL_INDIRECT ->
-                            addAll(referencedByType[types.getType(i.operand(0).toInt())].orEmpty())
-                        OpCode.CALL_REF, OpCode.RETURN_CALL_REF -> addAll(referenced)
-                        else -> {}
-                    }
-                }
-            }
-            val state = IntArray(callees.size) // 0 not seen, 1 on the current path, 2 done: no cycle through it
-            fun cycleFrom(f: Int): Boolean {
-                val k = f - imported
-                if (k !in callees.indices || state[k] == 2) return false
-                if (state[k] == 1) return true
-                state[k] = 1
-                if (callees[k].any { cycleFrom(it) }) return true
-                state[k] = 2
-                return false
-            }
-            return callees.indices.any { cycleFrom(it + imported) }
-        }
 
         private fun report(message: String) {
             if (synchronized(reported) { reported.add(message) }) logger.log(System.Logger.Level.INFO, "PocketBot emulator: $message")

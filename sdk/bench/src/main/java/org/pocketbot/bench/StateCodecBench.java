@@ -80,7 +80,7 @@ public class StateCodecBench {
                 new ProximitySide(0, 0, IrLed.FRONT, DistanceClass.NONE)),
             new StateColour(20, 22, 25, 70, Colour.BLACK), new StateAccel(12, -8, 1003), new StatePower(3870, 140, 312),
             new StateIndicators(1, 100), new StateLocomotion(LocoMode.MOVEMENT, 3, 17, 16),
-            new StateTrack(TrackStatus.FOLLOWING, 1, 4, 2), new StateErrors(0, 1, 0, 0, 0));
+            new StateTrack(TrackStatus.FOLLOWING, 1, 4, 2), new StateErrors(0, 1, 0, 0, 0, 0, 0, 0, 0));
         frame = Frames.INSTANCE.encode(new StateFull(s), 42);
         payload = Arrays.copyOfRange(frame, Frames.HEADER_SIZE, frame.length - Frames.CRC_SIZE);
         packet = Frames.INSTANCE.decodePayload(StateFull.TYPE, payload, 0, payload.length);

@@ -83,6 +83,10 @@ public object StateFields {
         f("errors.rejected", U16) { it.errors.rejected }
         f("errors.rx_overflow", U16) { it.errors.rxOverflow }
         f("errors.tx_dropped", U16) { it.errors.txDropped }
+        f("errors.bt_wire", U16) { it.errors.btWire }
+        f("errors.bt_timeouts", U16) { it.errors.btTimeouts }
+        f("errors.bt_resets", U16) { it.errors.btResets }
+        f("errors.bt_dropped", U16) { it.errors.btDropped }
     }
 
     /**

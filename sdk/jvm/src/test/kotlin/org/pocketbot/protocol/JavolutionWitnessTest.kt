@@ -108,10 +108,14 @@ class JavolutionWitnessTest {
         val state_errors_rejected = Unsigned16()
         val state_errors_rx_overflow = Unsigned16()
         val state_errors_tx_dropped = Unsigned16()
+        val state_errors_bt_wire = Unsigned16()
+        val state_errors_bt_timeouts = Unsigned16()
+        val state_errors_bt_resets = Unsigned16()
+        val state_errors_bt_dropped = Unsigned16()
     }
 
     @Test fun stateFull0() {
-        val bytes = hex("ecfd7d29fa1e5ad62c1dd052af3d56003eda2d04765502ef3b24b2462e8cbf306216fe8792f62f9557bfdb522073d10104d0bb0200e2540201a7c2b2650407715a91e18fd13be7ca3452aa4005b7a1914cf50055af18f5d9233bd4dd97d987ba12")
+        val bytes = hex("ecfd7d29fa1e5ad62c1dd052af3d56003eda2d04765502ef3b24b2462e8cbf306216fe8792f62f9557bfdb522073d10104d0bb0200e2540201a7c2b2650407715a91e18fd13be7ca3452aa4005b7a1914cf50055af18f5d9233bd4dd97d987ba129921f7817771e770")
         val s = StateFull0()
         assertEquals(bytes.size, s.size(), "state_full size")
         s.setByteBuffer(ByteBuffer.wrap(bytes).order(ByteOrder.LITTLE_ENDIAN), 0)
@@ -171,6 +175,10 @@ class JavolutionWitnessTest {
         assertEquals(38877, s.state_errors_rejected.get(), "state_full.state_errors_rejected")
         assertEquals(34777, s.state_errors_rx_overflow.get(), "state_full.state_errors_rx_overflow")
         assertEquals(4794, s.state_errors_tx_dropped.get(), "state_full.state_errors_tx_dropped")
+        assertEquals(8601, s.state_errors_bt_wire.get(), "state_full.state_errors_bt_wire")
+        assertEquals(33271, s.state_errors_bt_timeouts.get(), "state_full.state_errors_bt_timeouts")
+        assertEquals(29047, s.state_errors_bt_resets.get(), "state_full.state_errors_bt_resets")
+        assertEquals(28903, s.state_errors_bt_dropped.get(), "state_full.state_errors_bt_dropped")
     }
 
     private class StateFull1 : LePacked() {
@@ -230,10 +238,14 @@ class JavolutionWitnessTest {
         val state_errors_rejected = Unsigned16()
         val state_errors_rx_overflow = Unsigned16()
         val state_errors_tx_dropped = Unsigned16()
+        val state_errors_bt_wire = Unsigned16()
+        val state_errors_bt_timeouts = Unsigned16()
+        val state_errors_bt_resets = Unsigned16()
+        val state_errors_bt_dropped = Unsigned16()
     }
 
     @Test fun stateFull1() {
-        val bytes = hex("b091cda34ccf92d41c46df66cbc31824a786e46dcf79730a602e9b0a0b42c8d2ba8e12943387b1b90858a49eb5d1d500026dba0303cf560100a3ba56cc03e6701a0d0411b65b4199e2a19933022128b376520108c344fe72c6be9c1fd752a79443")
+        val bytes = hex("b091cda34ccf92d41c46df66cbc31824a786e46dcf79730a602e9b0a0b42c8d2ba8e12943387b1b90858a49eb5d1d500026dba0303cf560100a3ba56cc03e6701a0d0411b65b4199e2a19933022128b376520108c344fe72c6be9c1fd752a794435a33963d2691eecb")
         val s = StateFull1()
         assertEquals(bytes.size, s.size(), "state_full size")
         s.setByteBuffer(ByteBuffer.wrap(bytes).order(ByteOrder.LITTLE_ENDIAN), 0)
@@ -293,6 +305,10 @@ class JavolutionWitnessTest {
         assertEquals(55071, s.state_errors_rejected.get(), "state_full.state_errors_rejected")
         assertEquals(42834, s.state_errors_rx_overflow.get(), "state_full.state_errors_rx_overflow")
         assertEquals(17300, s.state_errors_tx_dropped.get(), "state_full.state_errors_tx_dropped")
+        assertEquals(13146, s.state_errors_bt_wire.get(), "state_full.state_errors_bt_wire")
+        assertEquals(15766, s.state_errors_bt_timeouts.get(), "state_full.state_errors_bt_timeouts")
+        assertEquals(37158, s.state_errors_bt_resets.get(), "state_full.state_errors_bt_resets")
+        assertEquals(52206, s.state_errors_bt_dropped.get(), "state_full.state_errors_bt_dropped")
     }
 
     private class StateReduced0 : LePacked() {

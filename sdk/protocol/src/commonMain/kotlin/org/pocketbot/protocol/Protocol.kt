@@ -5,12 +5,12 @@ package org.pocketbot.protocol
 public object ProtocolInfo {
     public const val VERSION: Int = 3
     /** Hash of every packet, settings and state layout; compared with the robot's `hello`. */
-    public const val LAYOUT_HASH: Long = 0x14AF42C3L
+    public const val LAYOUT_HASH: Long = 0x746D77FAL
     /** Firmware version this SDK was generated with. */
     public const val FIRMWARE_VERSION: String = "0.1.0"
     public const val MAX_PAYLOAD: Int = 120
     public const val SETTINGS_SIZE: Int = 175
-    public const val STATE_SIZE: Int = 97
+    public const val STATE_SIZE: Int = 105
 }
 
 /**
@@ -1448,6 +1448,14 @@ public class StateErrors(
     public val rxOverflow: Int,
     /** packets not sent because the transmit buffer was full */
     public val txDropped: Int,
+    /** Bluetooth HCI build: H4 packets from the controller that broke the wire's framing (bad packet type, ACL longer than announced, a packet cut off) */
+    public val btWire: Int,
+    /** Bluetooth HCI build: commands the controller did not answer within 1 s */
+    public val btTimeouts: Int,
+    /** Bluetooth HCI build: controller resets after a wire error, a timeout or a hardware error (links were dropped and are accepted again) */
+    public val btResets: Int,
+    /** Bluetooth HCI build: received L2CAP PDUs dropped (longer than the MTU, out of order, for no open channel, or arriving while an answer waited for room) */
+    public val btDropped: Int,
 ) {
     /** Writes the [SIZE] bytes of this struct into [b] at [at]. */
     public fun encodeTo(b: ByteArray, at: Int) {
@@ -1456,21 +1464,29 @@ public class StateErrors(
         b.putU16(at + 4, rejected)
         b.putU16(at + 6, rxOverflow)
         b.putU16(at + 8, txDropped)
+        b.putU16(at + 10, btWire)
+        b.putU16(at + 12, btTimeouts)
+        b.putU16(at + 14, btResets)
+        b.putU16(at + 16, btDropped)
     }
     override fun equals(other: Any?): Boolean =
-        this === other || other is StateErrors && crc == other.crc && framing == other.framing && rejected == other.rejected && rxOverflow == other.rxOverflow && txDropped == other.txDropped
+        this === other || other is StateErrors && crc == other.crc && framing == other.framing && rejected == other.rejected && rxOverflow == other.rxOverflow && txDropped == other.txDropped && btWire == other.btWire && btTimeouts == other.btTimeouts && btResets == other.btResets && btDropped == other.btDropped
     override fun hashCode(): Int {
         var h = crc.hashCode()
         h = 31 * h + framing.hashCode()
         h = 31 * h + rejected.hashCode()
         h = 31 * h + rxOverflow.hashCode()
         h = 31 * h + txDropped.hashCode()
+        h = 31 * h + btWire.hashCode()
+        h = 31 * h + btTimeouts.hashCode()
+        h = 31 * h + btResets.hashCode()
+        h = 31 * h + btDropped.hashCode()
         return h
     }
-    override fun toString(): String = "StateErrors(crc=$crc, framing=$framing, rejected=$rejected, rxOverflow=$rxOverflow, txDropped=$txDropped)"
+    override fun toString(): String = "StateErrors(crc=$crc, framing=$framing, rejected=$rejected, rxOverflow=$rxOverflow, txDropped=$txDropped, btWire=$btWire, btTimeouts=$btTimeouts, btResets=$btResets, btDropped=$btDropped)"
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 10
+        public const val SIZE: Int = 18
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
         public fun decode(b: ByteArray, at: Int): StateErrors {
             val crc = b.u16(at)
@@ -1478,7 +1494,11 @@ public class StateErrors(
             val rejected = b.u16(at + 4)
             val rxOverflow = b.u16(at + 6)
             val txDropped = b.u16(at + 8)
-            return StateErrors(crc, framing, rejected, rxOverflow, txDropped)
+            val btWire = b.u16(at + 10)
+            val btTimeouts = b.u16(at + 12)
+            val btResets = b.u16(at + 14)
+            val btDropped = b.u16(at + 16)
+            return StateErrors(crc, framing, rejected, rxOverflow, txDropped, btWire, btTimeouts, btResets, btDropped)
         }
     }
 }
@@ -1549,7 +1569,7 @@ public class RobotState(
     override fun toString(): String = "RobotState(time=$time, encoders=$encoders, wheels=$wheels, line=$line, lineFollow=$lineFollow, proximity=$proximity, colour=$colour, accel=$accel, power=$power, indicators=$indicators, locomotion=$locomotion, track=$track, errors=$errors)"
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 97
+        public const val SIZE: Int = 105
         /** Decodes [SIZE] bytes at [at]; the caller checked that they are there. */
         public fun decode(b: ByteArray, at: Int): RobotState {
             val time = StateTime.decode(b, at)
@@ -1751,17 +1771,17 @@ public data class StateFull(
 ) : Packet {
     override val type: Int get() = 2
     /** Encoded payload size in bytes. */
-    internal val payloadSize: Int get() = 97
+    internal val payloadSize: Int get() = 105
     internal fun encodeTo(b: ByteArray, at: Int) {
         state.encodeTo(b, at)
     }
     override fun encodePayload(): ByteArray = ByteArray(payloadSize).also { encodeTo(it, 0) }
     public companion object {
         /** Encoded size in bytes. */
-        public const val SIZE: Int = 97
+        public const val SIZE: Int = 105
         /** Packet type. */
         public const val TYPE: Int = 2
-        internal const val PAYLOAD_SIZE_MAX: Int = 97
+        internal const val PAYLOAD_SIZE_MAX: Int = 105
         /** Decodes the payload in `b` from [at] to [end], whose length the caller checked against [PACKET_SPECS]. */
         @Suppress("UNUSED_PARAMETER") // a fixed-size payload ends where its size says
         internal fun decode(b: ByteArray, at: Int, end: Int): StateFull {
@@ -2697,7 +2717,7 @@ public class PacketSpec(
 /** Every packet type of the protocol. */
 public val PACKET_SPECS: Map<Int, PacketSpec> = listOf(
     PacketSpec(1, "hello", 33, 33, true, false, false, false),
-    PacketSpec(2, "state_full", 97, 97, true, false, false, false),
+    PacketSpec(2, "state_full", 105, 105, true, false, false, false),
     PacketSpec(3, "state_reduced", 19, 19, true, false, false, false),
     PacketSpec(4, "ack", 1, 1, true, false, false, false),
     PacketSpec(5, "error", 5, 5, true, false, false, false),

@@ -7,6 +7,8 @@ import com.github.ajalt.clikt.core.CliktError
 import com.github.ajalt.clikt.core.parse
 import com.github.ajalt.clikt.parameters.options.convert
 import com.github.ajalt.clikt.parameters.options.default
+import com.github.ajalt.clikt.parameters.options.multiple
+import com.github.ajalt.clikt.parameters.types.choice
 import com.github.ajalt.clikt.parameters.options.option
 import com.github.ajalt.clikt.parameters.types.int
 import com.github.ajalt.clikt.parameters.types.long
@@ -15,9 +17,12 @@ import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.EmulatorConfig
 import org.pocketbot.emulator.SimTime
 import org.pocketbot.emulator.Speed
+import org.pocketbot.emulator.bluetooth.VirtualBluetooth
+import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.transport.ListenAddress
 import org.pocketbot.emulator.world.Worlds
 import java.io.IOException
+import java.net.InetSocketAddress
 import kotlin.system.exitProcess
 
 /**
@@ -31,8 +36,14 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         Ctrl-C or 'q' on stdin stops it. Only this machine reaches the robots unless --listen puts them on the
         network. Stdin commands: p pause, r resume, s single step, t time, q quit.
 
+        With --link hci every robot runs the firmware's HCI build and its UART carries H4 to a Bluetooth controller:
+        virtual ones (Bumble) and a gateway whose TCP ports reach each robot over Bluetooth, or the controllers
+        --h4 names (Bumble's HCI bridge in front of a USB dongle: then phones and computers reach the robots over
+        real Bluetooth).
+
         Examples: emulator --robots 3 --world round
                   emulator --listen 0.0.0.0      (a phone on the same Wi-Fi drives the robots)
+                  emulator --robots 2 --link hci (each robot behind its own virtual Bluetooth controller)
     """.trimIndent()
 
     private val robots by option(help = "robots to start, ids 1..N, at the world's start poses").int().restrictTo(1..254).default(1)
@@ -46,27 +57,63 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
     private val portBase by option("--port-base", help = "robot i listens on port P+i-1 (0 = any free port)").int().default(40001)
     private val controlPort by option("--control-port", help = "control port listing the robots (0 = any free port, -1 = none)").int().default(40000)
     private val threads by option(help = "threads stepping the robots").int().restrictTo(min = 1).default(EmulatorConfig().threads)
+    private val link by option("--link", help = "direct: the UART carries frames to TCP; hci: H4 to a Bluetooth controller")
+        .choice("direct", "hci").default("direct")
+    private val h4 by option("--h4", metavar = "HOST:PORT",
+        help = "with --link hci: robot i drives the H4 controller at the i-th --h4 instead of a virtual one").multiple()
 
     override fun run() {
         val pace = if (speed == "max") Speed.AsFastAsPossible
         else Speed.Realtime(speed.toDoubleOrNull()?.takeIf { it > 0 } ?: throw UsageError("--speed wants a positive number or max", "--speed"))
         val w = try { Worlds.load(world) } catch (e: Exception) { throw UsageError("cannot load world $world: ${e.message}", "--world") }
-        val emu = Emulator(w, EmulatorConfig(seed = seed, threads = threads)).also { e ->
+        val hci = link == "hci"
+        if (h4.isNotEmpty() && !hci) throw UsageError("--h4 needs --link hci", "--h4")
+        // A Bluetooth controller answers on the wall clock: the robot's firmware must run on it too.
+        if (hci && pace != Speed.Realtime(1.0)) throw UsageError("--link hci runs at --speed 1 only (controllers keep real time)", "--speed")
+        if (h4.isNotEmpty() && h4.size != robots) throw UsageError("--h4 names ${h4.size} controller(s) for $robots robot(s)", "--h4")
+        val firmware = if (hci) {
+            try { FirmwareImage.compiledHci() } catch (e: IllegalStateException) { throw CliktError(e.message) }
+        } else null
+        val emu = Emulator(w, EmulatorConfig(seed = seed, threads = threads, firmware = firmware)).also { e ->
             try { repeat(robots) { e.addRobot() } } catch (full: IllegalStateException) { e.close(); throw CliktError(full.message) }
-        }
-        val control = try {
-            emu.startTcp(basePort = portBase, controlPort = controlPort, listen = listen)
-        } catch (e: IOException) {
-            emu.close()
-            throw CliktError("cannot listen on ${ListenAddress.hostText(listen)}: ${e.message}")
         }
         // The lines name an address other programs reach: on the wildcard address, this machine's best network address.
         val reachable = ListenAddress.reachable(listen)
         val host = ListenAddress.hostText(reachable.first())
         val where = if (listen.isLoopbackAddress) "" else
             ", on the network at ${reachable.joinToString { ListenAddress.hostText(it) }} (anyone there can drive these robots)"
-        println("PocketBot emulator: world ${w.name}, $robots robot(s), seed $seed, speed ${describe(pace)}, firmware ${emu.firmwareEngine.name.lowercase()}$where")
-        for (r in emu.robots) println("robot ${r.id} ${r.name} tcp $host:${r.tcpPort}")
+        val lines = ArrayList<String>()
+        val control = try {
+            when {
+                !hci -> emu.startTcp(basePort = portBase, controlPort = controlPort, listen = listen).also {
+                    for (r in emu.robots) lines += "robot ${r.id} ${r.name} tcp $host:${r.tcpPort}"
+                }
+                h4.isNotEmpty() -> {
+                    for ((r, endpoint) in emu.robots.zip(h4)) {
+                        r.attachH4(parseEndpoint(endpoint))
+                        lines += "robot ${r.id} ${r.name} h4 $endpoint"
+                    }
+                    -1
+                }
+                else -> {
+                    val bt = VirtualBluetooth.start(robots, host = ListenAddress.hostText(listen))
+                    Runtime.getRuntime().addShutdownHook(Thread { bt.close() })
+                    val rfcomm = HashMap<Int, Int>()
+                    for ((r, c) in emu.robots.zip(bt.controllers)) {
+                        r.attachH4(c.h4)
+                        val b = bt.bridge(c.address)
+                        rfcomm[r.id] = b.rfcomm.port
+                        lines += "robot ${r.id} ${r.name} bt ${c.address} rfcomm tcp $host:${b.rfcomm.port} l2cap tcp $host:${b.l2cap.port}"
+                    }
+                    emu.startControlPort(controlPort, listen) { rfcomm[it.id] ?: -1 }
+                }
+            }
+        } catch (e: IOException) {
+            emu.close()
+            throw CliktError("cannot listen on ${ListenAddress.hostText(listen)}: ${e.message}")
+        }
+        println("PocketBot emulator: world ${w.name}, $robots robot(s), seed $seed, speed ${describe(pace)}${if (hci) ", link hci" else ""}, firmware ${emu.firmwareEngine.name.lowercase()}$where")
+        lines.forEach(::println)
         if (control >= 0) println("control $host:$control")
         System.out.flush()
         Runtime.getRuntime().addShutdownHook(Thread { emu.close() })
@@ -85,6 +132,12 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
                 else -> println("commands: p pause, r resume, s single step, t time, q quit")
             }
         }
+    }
+
+    private fun parseEndpoint(text: String): InetSocketAddress {
+        val port = text.substringAfterLast(':', "").toIntOrNull()?.takeIf { it in 1..65535 }
+            ?: throw UsageError("--h4 wants HOST:PORT, not $text", "--h4")
+        return InetSocketAddress(text.substringBeforeLast(':').removeSurrounding("[", "]"), port)
     }
 
     private fun describe(s: Speed) = when (s) {

@@ -61,7 +61,13 @@ public class TcpTransport private constructor(
             timeout: Duration,
             context: CoroutineContext = Dispatchers.Unconfined,
             loop: SocketLoop,
-        ): TcpTransport {
+        ): TcpTransport = TcpTransport(tcpAddress(host, port), openSocket(host, port, timeout, loop), context)
+
+        /**
+         * A connected non-blocking socket to [host]:[port] as a [ByteStream] served by [loop]; throws
+         * [TransportLostException] when nothing accepts the connection within [timeout].
+         */
+        internal suspend fun openSocket(host: String, port: Int, timeout: Duration, loop: SocketLoop): ByteStream {
             require(port in 1..65535) { "port $port is not a TCP port" }
             val address = tcpAddress(host, port)
             val channel = SocketChannel.open()
@@ -84,7 +90,7 @@ public class TcpTransport private constructor(
                 channel.close()
                 throw TransportLostException("$address: ${e.message?.lowercase() ?: e::class.simpleName}", e)
             }
-            return TcpTransport(address, SocketStream(channel, loop), context)
+            return SocketStream(channel, loop)
         }
 
         internal fun tcpAddress(host: String, port: Int): String =

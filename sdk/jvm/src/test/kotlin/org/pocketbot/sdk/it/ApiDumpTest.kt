@@ -40,7 +40,7 @@ class ApiDumpTest {
     @Test
     fun emulatorApiMatchesTheCheckedInDump() = check(
         Emulator::class.java, File("../../emulator/api/pocketbot-emulator.api"),
-        AbiFilters(emptySet(), setOf("org.pocketbot.emulator.firmware.FirmwareModule**"), emptySet(), emptySet()),
+        AbiFilters(emptySet(), setOf("org.pocketbot.emulator.firmware.FirmwareModule**", "org.pocketbot.emulator.firmware.HciFirmwareModule**"), emptySet(), emptySet()),
     )
 
     @Test
