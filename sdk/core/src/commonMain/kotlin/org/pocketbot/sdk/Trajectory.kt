@@ -65,7 +65,7 @@ public class Trajectory(
         val last = if (size > 0) array[size - 1] else null
         if (last != null) {
             val step = last.pose.distanceTo(p.pose)
-            if (step < minStepM && kotlin.math.abs(p.pose.headingRad - last.pose.headingRad) < minTurnRad) return
+            if (step < minStepM && kotlin.math.abs(wrapAngle(p.pose.headingRad - last.pose.headingRad)) < minTurnRad) return
             length += step
         }
         if (size == capacity) halve()

@@ -86,12 +86,18 @@ public class TcpTransport private constructor(
             } catch (e: CancellationException) {
                 channel.close()
                 throw e
+            } catch (e: java.net.ConnectException) {
+                channel.close()
+                throw TransportLostException("$address: nothing listens there (connection refused): $NOT_LISTENING", e)
             } catch (e: Exception) {
                 channel.close()
                 throw TransportLostException("$address: ${e.message?.lowercase() ?: e::class.simpleName}", e)
             }
             return SocketStream(channel, loop)
         }
+
+        /** What a refused connection most likely means. */
+        internal const val NOT_LISTENING = "is the emulator (make emulator, pocketbot emulator) or the robot's TCP bridge running?"
 
         internal fun tcpAddress(host: String, port: Int): String =
             if (':' in host) "tcp://[$host]:$port" else "tcp://$host:$port"

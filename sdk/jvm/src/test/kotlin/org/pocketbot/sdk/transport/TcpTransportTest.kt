@@ -19,6 +19,8 @@ import kotlinx.coroutines.channels.ClosedReceiveChannelException
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.flow.first
+import org.pocketbot.sdk.ConnectFailedException
+import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.connect
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
@@ -169,7 +171,18 @@ class TcpTransportTest {
     fun connectingWhereNothingListensFailsWithTransportLost() = test {
         val closedPort = ServerSocket(0, 1, InetAddress.getLoopbackAddress()).use { it.localPort }
         val e = assertFailsWith<TransportLostException> { TcpRobotDevice("127.0.0.1", closedPort).open() }
-        assertTrue(e.message!!.endsWith("127.0.0.1:$closedPort: connection refused"), e.message)
+        assertEquals("tcp://127.0.0.1:$closedPort: nothing listens there (connection refused): is the emulator " +
+            "(make emulator, pocketbot emulator) or the robot's TCP bridge running?", e.message)
+    }
+
+    @Test
+    fun connectingARobotWhereNothingListensSaysSoWithTheAddressOnce() = test {
+        val closedPort = ServerSocket(0, 1, InetAddress.getLoopbackAddress()).use { it.localPort }
+        val started = System.nanoTime()
+        val e = assertFailsWith<ConnectFailedException> { TcpRobotDevice("127.0.0.1", closedPort).connect(this, RobotOptions()) }
+        assertEquals("cannot connect to tcp://127.0.0.1:$closedPort: nothing listens there (connection refused): is the " +
+            "emulator (make emulator, pocketbot emulator) or the robot's TCP bridge running?", e.message)
+        assertTrue(System.nanoTime() - started < 2_000_000_000L, "at once, not after the handshake's retries")
     }
 
     @Test
