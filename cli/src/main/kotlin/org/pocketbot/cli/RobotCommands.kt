@@ -490,7 +490,7 @@ class MoveCommand : DrivingCommand("move", 2..3) {
             "robot" to robot.identity.name, "id" to handle.id, "movement" to movement.toString(),
             "outcome" to (result?.outcome ?: MovementOutcome.LOST),
             // The robot's own figure is a float: as it says it. Without one, what this host saw.
-            "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit,
+            "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit.symbol,
         )
     }
 }

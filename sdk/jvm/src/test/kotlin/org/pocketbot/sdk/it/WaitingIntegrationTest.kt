@@ -6,6 +6,7 @@ import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.sdk.ConnectFailedException
 import org.pocketbot.sdk.Fleet
+import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Locomotion
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
@@ -14,6 +15,7 @@ import kotlin.math.abs
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
 import kotlin.test.assertTrue
+import kotlin.time.Duration.Companion.milliseconds
 
 /** Waiting that means what it says, on the real firmware: settled odometry, programs longer than the queue. */
 class WaitingIntegrationTest {
@@ -23,6 +25,8 @@ class WaitingIntegrationTest {
     fun afterAwaitSettledOdometryIsWhereTheRobotStoppedAndLaterStatesSaySo() = withEmulator(world = "open") { emu ->
         val robot = connectAll(emu).single()
         val sim = emu.handleOf(robot)
+        // States 300 ms apart: the robot stands still and reports its last movement well before the next state.
+        robot.reflector.set(SyncMode.FULL, 300.milliseconds)
         robot.odometry.reset(sim.truePose)
         square.forEach { robot.locomotion.enqueue(it) }
         robot.locomotion.awaitSettled()
