@@ -65,8 +65,16 @@ public class Odometry internal constructor(private val link: LinkPort, private v
     /** The dead-reckoned pose, updated with every state update; its heading is in -pi..pi (see above). */
     public val pose: StateFlow<Pose> = _pose.asStateFlow()
 
-    /** The dead-reckoned path: a point whenever the pose moved 1 mm or turned 1 degree (see [Trajectory]). */
-    public val trajectory: Trajectory = Trajectory()
+    private val path = Trajectory()
+
+    /**
+     * The dead-reckoned path: a point whenever the pose moved 1 mm or turned about 1 degree (see [Trajectory]).
+     * Odometry records it; [clearTrajectory] starts it again.
+     */
+    public val trajectory: ReadOnlyTrajectory get() = path
+
+    /** Forgets the [trajectory] so far: it goes on from the next pose. Safe to call from any thread. */
+    public fun clearTrajectory(): Unit = path.clear()
 
     /** The wheel distances and the distance travelled since [reset], from the encoders and the robot's geometry. */
     public val wheelDistances: StateFlow<WheelDistances> = _wheels.asStateFlow()
@@ -79,7 +87,7 @@ public class Odometry internal constructor(private val link: LinkPort, private v
      */
     public suspend fun reset(pose: Pose = Pose.ORIGIN) {
         link.serial {
-            trajectory.clear()
+            path.clear()
             if (started) rebase(lastLeft, lastRight, pose) else pendingReset = pose
         }
     }
@@ -97,7 +105,7 @@ public class Odometry internal constructor(private val link: LinkPort, private v
         x = p.xM
         y = p.yM
         _pose.value = Pose(x, y, wrapAngle(heading))
-        trajectory.add(lastTimeMs, _pose.value)
+        path.add(lastTimeMs, _pose.value)
         publishWheels()
     }
 
@@ -143,7 +151,7 @@ public class Odometry internal constructor(private val link: LinkPort, private v
         lastLeft = encoders.left
         lastRight = encoders.right
         _pose.value = Pose(x, y, wrapAngle(heading))
-        trajectory.add(timeMs, _pose.value)
+        path.add(timeMs, _pose.value)
         publishWheels()
     }
 
