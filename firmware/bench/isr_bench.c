@@ -157,7 +157,8 @@ static void ticks_and_line_phases(uint16_t n)
     }
 }
 
-static uint16_t ir_frames[13];
+#define IR_MESSAGE_FRAMES 5u /* a message without payload: sync, sender, LED and length, power, CRC */
+static uint16_t ir_frames[IR_MESSAGE_FRAMES + HAL_IR_PAYLOAD_MAX];
 
 static uint16_t frame_written(void)
 {
@@ -180,11 +181,11 @@ static void a_beacon(void)
 {
     time_to(100000u);
     call(19);
-    transmit_message(5);
+    transmit_message(IR_MESSAGE_FRAMES);
     for (uint8_t m = 1; m < 4; m++) {
         time_to(now_us + hal_ir_message_us(0) + 1000u);
         call(18);
-        transmit_message(5);
+        transmit_message(IR_MESSAGE_FRAMES);
     }
 }
 
@@ -195,7 +196,7 @@ static void a_message_heard(void)
     time_to(now_us + 100000u);
     if (!hal_ir_send(&m))
         return;
-    uint8_t n = 5u + 8u;
+    uint8_t n = (uint8_t)(IR_MESSAGE_FRAMES + m.len);
     transmit_message(n);
     for (uint8_t side = 0; side < 2; side++) {
         for (uint8_t i = 0; i < n; i++) {

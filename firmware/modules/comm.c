@@ -177,7 +177,7 @@ static void out_put(uint8_t b)
 }
 
 /* The inner loop of every packet sent: CRC and SLIP-escape `n` bytes; a chunk is written out whenever it fills,
- * the UART's ring has room for all of it. */
+ * a link's own ring has room for all of it. */
 static uint16_t out_encode(uint16_t crc, const uint8_t *p, uint8_t n)
 {
     uint8_t i = out.pos;
@@ -585,8 +585,8 @@ static void seat_watch(void)
         seat.expired = 1;
 }
 
-/* The host on link k leaves (`goodbye`): the driver's leave ends the failsafe's guard (what it queued is the
- * robot's to finish or drop now, as the goodbye's handler did). */
+/* The host on link k leaves the drive (`goodbye`, or `set_role` to watch): the driver's leave ends the failsafe's
+ * guard (what it queued is the robot's to finish, or to drop as a goodbye's handler did). */
 static void leave(uint8_t k)
 {
     links[k].wants = PB_HOST_ROLE_WATCH;
@@ -689,9 +689,7 @@ static uint8_t on_set_role(const pb_frame_t *cmd, uint16_t *detail)
     link_t *l = &links[k];
     memcpy(l->label, r.label, sizeof l->label);
     if (r.role == PB_HOST_ROLE_WATCH) {
-        l->wants = PB_HOST_ROLE_WATCH;
-        if (seat.link == k)
-            seat_free(PB_DRIVER_CHANGE_LEFT);
+        leave(k);
     } else {
         l->wants = PB_HOST_ROLE_DRIVE;
         if (seat.link == k)

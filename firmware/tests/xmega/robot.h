@@ -37,4 +37,8 @@ typedef struct {
 const robot_frame_t *robot_frame(uint8_t type, uint32_t n);
 void robot_frames_clear(void);
 
+/** A byte's frame on the robots' IR link (cycles): 11 bits (start bit, 8 data bits, the line code's bit, stop bit)
+ *  at 2400 Bd, as another robot sends them. */
+#define ROBOT_IR_FRAME ((uint64_t)(11.0 * (double)XM_HZ / 2400.0))
+
 #endif

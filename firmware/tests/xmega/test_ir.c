@@ -177,9 +177,8 @@ static uint64_t hear(uint8_t u, uint8_t sender, uint8_t led, uint8_t power, cons
     if (len)
         memcpy(raw + 4, data, len);
     raw[4 + len] = crc8(raw + 1, (uint8_t)(3 + len));
-    uint64_t frame = (uint64_t)(11.0 * (double)XM_HZ / 2400.0) /* 11-bit frames at 2400 Bd */;
     for (uint8_t i = 0; i < 5 + len; i++) {
-        at += frame;
+        at += ROBOT_IR_FRAME;
         xm_usart_rx_at(u, line_code(raw[i]), at, false);
     }
     return at;

@@ -51,11 +51,10 @@ static void host_talks(uint64_t from, uint64_t to, uint8_t how)
     }
 }
 
-/* Another robot's messages on both receivers, back to back as its link allows (9-bit frames: 11 bits, 2400 Bd). */
+/* Another robot's messages on both receivers, back to back as its link allows. */
 static void ir_heard(uint64_t from, uint64_t to)
 {
-    uint64_t frame = (uint64_t)(11.0 * (double)XM_HZ / 2400.0) /* 11-bit frames at 2400 Bd */;
-    for (uint64_t t = from; t < to; t += frame)
+    for (uint64_t t = from; t < to; t += ROBOT_IR_FRAME)
         for (uint8_t u = XM_USARTD0; u <= XM_USARTD1; u++)
             xm_usart_rx_at(u, 0x55, t, false); /* no message: noise the receivers must sift */
 }

@@ -225,6 +225,12 @@ class AppHarness(
         run(10.milliseconds)
     }
 
+    /** A thumb lands on the joystick [stick]'s knob (its centre) and pushes it to ([fx], [fy]) of the pad's size. */
+    suspend fun push(stick: View, fx: Float, fy: Float) {
+        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
+        touch(stick, MotionEvent.ACTION_MOVE, fx, fy)
+    }
+
     /**
      * A finger lands on [on] at ([fromX], [fromY]) of its size and slides vertically to [toY], in steps, as a scroll
      * does; the events go in at the window, so every view on the way (a ScrollView above) sees them as on a phone.

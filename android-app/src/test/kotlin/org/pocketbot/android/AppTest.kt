@@ -2,7 +2,6 @@ package org.pocketbot.android
 
 import android.Manifest
 import android.bluetooth.BluetoothAdapter
-import android.content.Intent
 import android.graphics.Color
 import android.provider.Settings
 import android.view.MotionEvent
@@ -48,8 +47,7 @@ class AppTest {
         val stick = find<JoystickCanvas>()
         val start = robot.truePose
 
-        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
-        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.2f) // knob pushed forward
+        push(stick, 0.5f, 0.2f) // knob pushed forward
         run(1.seconds)
         screenshot("drive")
         val forward = robot.truePose
@@ -110,8 +108,7 @@ class AppTest {
         run(20.milliseconds)
 
         // On the pad, within the dead zone: held, asking for nothing.
-        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
-        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.47f)
+        push(stick, 0.5f, 0.47f)
         run(500.milliseconds)
         assertTrue(joystick.state.value.held && joystick.state.value.leftMps == 0.0, "${joystick.state.value}")
         assertTrue(moved() < 0.002, "a resting thumb does not creep: ${moved()} m")
@@ -257,8 +254,7 @@ class AppTest {
         robot.place(Pose.ofDegrees(0.4, 0.4, 0.0))
         click("Drive")
         val stick = find<JoystickCanvas>()
-        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
-        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.25f)
+        push(stick, 0.5f, 0.25f)
         run(500.milliseconds)
         robot.disconnectLink()
         until("the app notices the loss") { model.session.value!!.robot.connection.value !is ConnectionState.Connected }

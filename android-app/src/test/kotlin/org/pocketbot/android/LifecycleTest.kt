@@ -146,9 +146,7 @@ class LifecycleTest {
         val service = startedService()
         val session = model.session.value!!
         val robot = emulator.robots.single()
-        click("Follow")
-        click("Start")
-        until("following the line") { session.robot.lineFollower.followStatus == LineFollowStatus.FOLLOWING }
+        startFollowing()
         until("the screen is kept on while the robot drives") { keepsScreenOn() }
         controller.pause().stop() // the app in the background; the robot follows the line
 
@@ -168,9 +166,7 @@ class LifecycleTest {
         val service = startedService()
         val session = model.session.value!!
         val robot = emulator.robots.single()
-        click("Follow")
-        click("Start")
-        until("following the line") { session.robot.lineFollower.followStatus == LineFollowStatus.FOLLOWING }
+        startFollowing()
         controller.pause().stop() // the recent apps screen: the app goes to the background ...
         run(1.seconds)
         assertEquals(ConnectionState.Connected, session.robot.connection.value, "... and stays connected there")
@@ -193,9 +189,7 @@ class LifecycleTest {
         connectRobot()
         val session = model.session.value!!
         val robot = emulator.robots.single()
-        click("Follow")
-        click("Start")
-        until("following the line") { session.robot.lineFollower.followStatus == LineFollowStatus.FOLLOWING }
+        startFollowing()
 
         pressBack()
         assertStopped(robot)
@@ -213,6 +207,13 @@ class LifecycleTest {
         until("the robot is disconnected") { model.session.value == null && session.robot.connection.value is ConnectionState.Closed }
         assertTrue(activity.isFinishing, "and the app is left")
         assertStopped(robot)
+    }
+
+    /** Starts line following on the Follow screen, as a person does, and waits until the robot follows the line. */
+    private suspend fun AppHarness.startFollowing() {
+        click("Follow")
+        click("Start")
+        until("following the line") { model.session.value!!.robot.lineFollower.followStatus == LineFollowStatus.FOLLOWING }
     }
 
     private fun AppHarness.keepsScreenOn() = activity.window.attributes.flags and WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON != 0

@@ -51,8 +51,7 @@ class NetworkEmulatorTest {
                 click("Drive")
                 val stick = find<JoystickCanvas>()
                 val start = robot.truePose
-                touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
-                touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.25f)
+                push(stick, 0.5f, 0.25f)
                 until("the robot drives forward") { robot.truePose.yM - start.yM > 0.05 }
                 val end = robot.truePose
                 assertTrue(abs(end.xM - start.xM) < 0.01, "straight ahead: $start -> $end")

@@ -374,8 +374,7 @@ class RfcommTest {
         click("Drive")
         val stick = find<JoystickCanvas>()
         val start = robot.trueWheelDistances
-        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
-        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.3f)
+        push(stick, 0.5f, 0.3f)
         until("the robot drives") { robot.trueWheelDistances.leftM - start.leftM > 0.02 }
         touch(stick, MotionEvent.ACTION_UP, 0.5f, 0.3f)
     }
@@ -404,8 +403,7 @@ class RfcommTest {
         robot.place(Pose.ofDegrees(0.4, 0.4, 0.0)) // open floor inside the track
         click("Drive")
         val stick = find<JoystickCanvas>()
-        touch(stick, MotionEvent.ACTION_DOWN, 0.5f, 0.5f)
-        touch(stick, MotionEvent.ACTION_MOVE, 0.5f, 0.3f)
+        push(stick, 0.5f, 0.3f)
         val start = robot.trueWheelDistances
         until("the robot drives") { robot.trueWheelDistances.leftM - start.leftM > 0.02 }
         assertEquals(LocoMode.TELEOP, robot.state().locomotion.mode, "driven by the joystick")

@@ -464,14 +464,13 @@ class MoveCommand : DrivingCommand("move", 2..3) {
     /** Queues the movement on [r], saying so when that ends the line following or track behaviour the robot ran. */
     private suspend fun start(r: Robot): Started {
         val mode = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }?.locomotion?.mode
-        val handle = r.locomotion.enqueue(movement)
-        val from = r.odometry.pose.value to r.odometry.wheelDistances.value
+        val started = Started(r, r.locomotion.enqueue(movement), r.odometry.pose.value, r.odometry.wheelDistances.value)
         when (mode) {
             LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.identity.name} was following the line: the movement ended that")
             LocoMode.TRACK -> System.err.println("pocketbot: ${r.identity.name} ran the track behaviour: the movement ended that")
             else -> {}
         }
-        return Started(r, handle, from.first, from.second)
+        return started
     }
 
     /** A movement the robot took, and where its odometry stood then. */

@@ -93,8 +93,7 @@ class PanelFleetUiTest {
     fun rotateArcImmediateStopAndTheJoystickMoveTheRobot() = PanelFixture(world = "straight").use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             val handle = robot.emulated!!
             onNodeWithTag("tab-COMMANDS").performClick()
 
@@ -149,8 +148,7 @@ class PanelFleetUiTest {
     fun lineFollowingInColourModeSlowsDownOnRedAndStopsOnRequest() = PanelFixture(world = "colours").use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val handle = f.panel.selected.value!!.emulated!!
+            val handle = connectRobot(f).emulated!!
             onNodeWithTag("tab-COMMANDS").performClick()
             onNodeWithTag("follow-speed").performTextReplacement("0.15")
             onNodeWithTag("follow-colours").performClick()
@@ -197,8 +195,7 @@ class PanelFleetUiTest {
     fun theConsoleSetsTheRobotsLevelShowsItsTextAndFiltersByLevel() = PanelFixture(world = "straight").use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             onNodeWithTag("tab-CONSOLE").performClick()
             onNodeWithTag("set-level-3").performClick()
             waitUntil(timeoutMillis = guard) { f.robotDebugLevel() == 3 && onNodeWithTag("robot-debug-level").text().endsWith("3") }

@@ -30,8 +30,7 @@ class PanelTruthUiTest {
     fun aRobotWhoseLinkDiedShowsEveryValueStaleWithItsAgeInEveryView() = PanelFixture(world = "straight").use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             onNodeWithTag("tab-COMMANDS").performClick()
             onNodeWithTag("move-amount").performTextReplacement("1.0")
             onNodeWithTag("move-speed").performTextReplacement("0.1")
@@ -75,8 +74,7 @@ class PanelTruthUiTest {
     fun floatSettingsReadAsTypedAndAnEnumSettingIsChosenByName() = PanelFixture().use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             onNodeWithTag("tab-SETTINGS").performClick()
             onNodeWithTag("settings-list").performScrollToKey("line_pid.kp")
             assertEquals("0.0004", onNodeWithTag("setting-line_pid.kp").text(), "the robot's default, as the docs write it")
@@ -120,8 +118,7 @@ class PanelTruthUiTest {
     fun theStepTestAsksFirstRunsTheChosenSizeAndShowsOnlyItsOwnControllersResult() = PanelFixture(world = "straight").use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             val handle = robot.emulated!!
             onNodeWithTag("tab-TUNING").performClick()
             onNodeWithTag("controller-ROBOT_SPEED").performClick()
@@ -161,8 +158,7 @@ class PanelTruthUiTest {
     fun aMovementOverLineFollowingAsksFirstAndARunningMovementSaysRunning() = PanelFixture().use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             onNodeWithTag("tab-COMMANDS").performClick()
             onNodeWithTag("follow-start").performClick()
             await("following") { robot.robot.state.value.locomotion.mode == LocoMode.LINE_FOLLOW }
@@ -186,8 +182,7 @@ class PanelTruthUiTest {
     fun theMovementFormKeepsItsInputAndRepeatedReconnectFailuresAreOneCountedLine() = PanelFixture(world = "straight").use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             onNodeWithTag("tab-COMMANDS").performClick()
             onNodeWithTag("kind-ARC").performClick()
             onNodeWithTag("move-amount").performTextReplacement("45")
@@ -212,6 +207,8 @@ class PanelTruthUiTest {
             val link = onNodeWithTag("robot-link-PocketBot-1", useUnmergedTree = true).text()
             assertTrue(Regex("""down for \d+ s""").containsMatchIn(link), link)
             assertEquals(1, Regex(Regex.escape(robot.address)).findAll(link).count(), "the address once: $link")
+            val driver = onNodeWithTag("driver-PocketBot-1", useUnmergedTree = true).text()
+            assertTrue(driver.endsWith("drove it when last heard"), "who drives is not known while the link is down: $driver")
 
             robot.emulated!!.reconnectLink()
             await("back") { robot.robot.connection.value == ConnectionState.Connected }

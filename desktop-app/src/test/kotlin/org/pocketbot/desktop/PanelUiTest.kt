@@ -72,8 +72,7 @@ class PanelUiTest {
     fun aQueuedMovementFinishesAndTheTrajectoryGrowsByItsLength() = PanelFixture().use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             val before = robot.robot.odometry.trajectory.lengthM
             onNodeWithTag("tab-COMMANDS").performClick()
             onNodeWithTag("move-amount").performTextReplacement("0.15")
@@ -107,8 +106,7 @@ class PanelUiTest {
     fun theTuningChartReceivesEveryReducedStateSampleAndTheGainsStepFreezeAndOverlay() = PanelFixture().use { f ->
         runComposeUiTest {
             setContent { PanelApp(f.panel) }
-            connectRobot(f)
-            val robot = f.panel.selected.value!!
+            val robot = connectRobot(f)
             onNodeWithTag("tab-TUNING").performClick()
             onNodeWithTag("controller-WHEEL_SPEED").performClick()
             onNodeWithTag("tuning-start").performClick()

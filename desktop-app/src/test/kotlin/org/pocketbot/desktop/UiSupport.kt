@@ -7,6 +7,7 @@ import androidx.compose.ui.test.SemanticsNodeInteraction
 import androidx.compose.ui.test.hasTestTag
 import androidx.compose.ui.test.onNodeWithTag
 import androidx.compose.ui.test.performClick
+import org.pocketbot.desktop.model.RobotModel
 
 /** How long a loaded CI machine may take: a liveness guard for waits, not a timing assertion. */
 const val GUARD_MS = 30_000L
@@ -34,13 +35,17 @@ fun SemanticsNodeInteraction.isSelected(): Boolean = fetchSemanticsNode().config
 @OptIn(ExperimentalTestApi::class)
 fun ComposeUiTest.exists(tag: String): Boolean = onAllNodes(hasTestTag(tag)).fetchSemanticsNodes().isNotEmpty()
 
-/** Finds the emulated robot [id] in the sidebar, ticks it and connects it, as a person would. */
+/**
+ * Finds the emulated robot [id] in the sidebar, ticks it and connects it, as a person would; returns it (the first
+ * robot connected is the selected one).
+ */
 @OptIn(ExperimentalTestApi::class)
-fun ComposeUiTest.connectRobot(f: PanelFixture, id: Int = 1) {
+fun ComposeUiTest.connectRobot(f: PanelFixture, id: Int = 1): RobotModel {
     waitUntil(timeoutMillis = GUARD_MS) { exists("tick-emulator:$id") }
     onNodeWithTag("tick-emulator:$id").performClick()
     onNodeWithTag("connect-ticked").performClick()
     waitUntil(timeoutMillis = GUARD_MS) { exists("robot-PocketBot-$id") && f.panel.selected.value != null }
+    return f.panel.robots.value.first { it.name == "PocketBot-$id" }
 }
 
 /** [ComposeUiTest.waitUntil] that says what it waited for, and how things stood, when the guard runs out. */

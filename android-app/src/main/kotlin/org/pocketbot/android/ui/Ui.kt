@@ -17,6 +17,7 @@ import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.launch
 import org.pocketbot.android.model.Freshness
+import org.pocketbot.sdk.toDecimalString
 
 /**
  * The app's colours, light and dark. Every text colour has at least 4.5:1 contrast on the backgrounds it is used on
@@ -158,13 +159,10 @@ fun Context.gap(dp: Int): View = View(this).apply { layoutParams = LinearLayout.
 fun mps(v: Double): String = "%.2f m/s".format(v)
 
 /**
- * A float setting as people read it: the shortest decimal that reads back to the same 32-bit float the robot holds,
- * never in scientific notation (`0.15`, not `0.15000000596` or `1.5E-1`).
+ * A speed setting in m/s as people read it: the shortest decimal that reads back to the same 32-bit float the robot
+ * holds, never in scientific notation (`0.15`, not `0.15000000596` or `1.5E-1`).
  */
-fun shortest(v: Double): String = java.math.BigDecimal(v.toFloat().toString()).stripTrailingZeros().toPlainString()
-
-/** A speed setting in m/s, as [shortest] writes it. */
-fun settingMps(v: Double): String = "${shortest(v)} m/s"
+fun settingMps(v: Double): String = "${v.toFloat().toDecimalString()} m/s"
 
 /** [colour] while the values are live, the soft grey of old values otherwise. */
 fun Palette.live(f: Freshness, colour: Int): Int = if (f.live) colour else TEXT_SOFT

@@ -22,7 +22,6 @@ import org.pocketbot.sdk.Trajectory
 import org.pocketbot.sdk.transport.Discoverer
 import org.pocketbot.sdk.transport.EmulatorDiscoverer
 import org.pocketbot.sdk.transport.RobotDevice
-import org.pocketbot.sdk.transport.Transport
 import java.io.IOException
 import java.net.InetAddress
 import java.net.InetSocketAddress

@@ -153,7 +153,10 @@ private fun MovementList(robot: RobotModel) {
         // Mode and queue come with full states only.
         val stale = !freshness.full.isLive
         val since = asOf(freshness.full).let { if (it.isEmpty()) "" else " ($it)" }
-        Text("robot: ${state.mode.name.lowercase()}, ${state.queueLength} queued$since",
+        // The robot's queue length counts the movement it runs.
+        val running = state.mode == LocoMode.MOVEMENT && state.queueLength > 0
+        val queue = if (running) "1 running, ${state.queueLength - 1} queued" else "${state.queueLength} queued"
+        Text("robot: ${state.mode.name.lowercase()}, $queue$since",
             Modifier.testTag("robot-queue").stale(stale), style = MaterialTheme.typography.bodySmall, color = valueColour(stale))
         if (movements.isEmpty()) Text("Nothing queued from this panel yet.", style = MaterialTheme.typography.bodySmall)
         for (m in movements.asReversed()) {

@@ -111,19 +111,23 @@ private fun ConnectedRobot(robot: RobotModel, selected: Boolean, onSelect: () ->
         // The address once: a failure's reason often names it already.
         Text(if (robot.address in link) link else "$link · ${robot.address}", Modifier.testTag("robot-link-${robot.name}"),
             style = MaterialTheme.typography.bodySmall)
-        Driver(robot)
+        Driver(robot, live = connection == ConnectionState.Connected)
         LinkCounters(robot)
     }
 }
 
-/** Who drives the robot, and while another host does, the button that takes it over. */
+/**
+ * Who drives the robot, and while another host does, the button that takes it over. With the link down the panel
+ * cannot know who drives now (the robot frees the drive after its failsafe time): it says who did when last heard.
+ */
 @Composable
-private fun Driver(robot: RobotModel) {
+private fun Driver(robot: RobotModel, live: Boolean) {
     val driving by robot.driving.collectAsState()
     Row(verticalAlignment = Alignment.CenterVertically) {
-        Text(drivingText(driving), Modifier.weight(1f).testTag("driver-${robot.name}"), style = MaterialTheme.typography.bodySmall,
-            color = if (driving.byThisHost) MaterialTheme.colorScheme.onSurfaceVariant else MaterialTheme.colorScheme.primary)
-        if (!driving.byThisHost) {
+        Text(if (live) drivingText(driving) else drivenWhenLastHeard(driving), Modifier.weight(1f).testTag("driver-${robot.name}"),
+            style = MaterialTheme.typography.bodySmall,
+            color = if (driving.byThisHost || !live) MaterialTheme.colorScheme.onSurfaceVariant else MaterialTheme.colorScheme.primary)
+        if (live && !driving.byThisHost) {
             TextButton(onClick = robot::takeOver, modifier = Modifier.height(32.dp).testTag("take-over-${robot.name}")) { Text("Take over") }
         }
     }
@@ -134,6 +138,13 @@ fun drivingText(d: Driving): String = when {
     d.byThisHost -> "this panel drives it"
     d.driver != null -> "watching: ${d.driver} drives it"
     else -> "watching: no host drives it"
+}
+
+/** Who drove a robot when its link was last up: while it is down, the robot may have freed the drive. */
+fun drivenWhenLastHeard(d: Driving): String = when {
+    d.byThisHost -> "this panel drove it when last heard"
+    d.driver != null -> "${d.driver} drove it when last heard"
+    else -> "no host drove it when last heard"
 }
 
 /** The part of a robot's card that keeps changing, in a scope of its own: the rest is not composed again with it. */

@@ -17,7 +17,6 @@ import androidx.compose.foundation.rememberScrollState
 import androidx.compose.foundation.verticalScroll
 import androidx.compose.material3.CardDefaults
 import androidx.compose.material3.MaterialTheme
-import androidx.compose.material3.Surface
 import androidx.compose.material3.Text
 import androidx.compose.runtime.Composable
 import androidx.compose.runtime.collectAsState
@@ -29,7 +28,6 @@ import androidx.compose.ui.graphics.Color
 import androidx.compose.ui.platform.testTag
 import androidx.compose.ui.semantics.contentDescription
 import androidx.compose.ui.semantics.semantics
-import androidx.compose.ui.semantics.stateDescription
 import androidx.compose.ui.text.font.FontStyle
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.RobotModel
@@ -88,7 +86,10 @@ fun SensorsView(robot: RobotModel) {
             }
             Panel("Locomotion", Modifier.weight(1f)) {
                 Value("mode", s.locomotion.mode.name.lowercase(), Modifier.testTag("loco-mode"), stale = old)
-                Value("queue", "${s.locomotion.queueLength} (running #${s.locomotion.currentId}, last finished #${s.locomotion.finishedId})",
+                // Movement id 0 is none: the robot numbers movements from 1.
+                val running = if (s.locomotion.currentId == 0) "none running" else "running #${s.locomotion.currentId}"
+                val finished = if (s.locomotion.finishedId == 0) "none finished" else "last finished #${s.locomotion.finishedId}"
+                Value("queue", "${s.locomotion.queueLength} ($running, $finished)",
                     Modifier.testTag("loco-queue"), stale = old)
                 Value("line follower", "${s.lineFollow.status.name.lowercase()} on ${s.lineFollow.segment.name.lowercase()}", stale = old)
             }

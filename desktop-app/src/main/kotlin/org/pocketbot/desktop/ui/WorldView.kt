@@ -38,7 +38,6 @@ import androidx.compose.ui.text.rememberTextMeasurer
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.TrueRobot
-import org.pocketbot.desktop.model.WorldSnapshot
 import org.pocketbot.emulator.physics.RobotParams
 import org.pocketbot.emulator.world.Tape
 import org.pocketbot.emulator.world.TapeColour

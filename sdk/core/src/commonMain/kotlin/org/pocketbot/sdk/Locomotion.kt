@@ -25,7 +25,6 @@ import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.link.CommandWithdrawnException
 import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.math.PI
-import kotlin.math.round
 import kotlin.random.Random
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -309,9 +308,8 @@ public class Locomotion internal constructor(
         lastRight = encoders.right
         val h = running ?: return
         val s = settings()
-        val metresPerPulse = PI * s.geometry.wheelDiameterM / s.encoder.pulsesPerRev
-        val left = (lastLeft - startLeft) * metresPerPulse
-        val right = (lastRight - startRight) * metresPerPulse
+        val left = (lastLeft - startLeft) * s.metresPerPulse
+        val right = (lastRight - startRight) * s.metresPerPulse
         h.seenDone = when (h.movement) {
             is Movement.Straight -> (left + right) / 2
             is Movement.Rotate, is Movement.Arc -> (right - left) / s.geometry.wheelBaseM * 180 / PI
@@ -446,8 +444,6 @@ public class Locomotion internal constructor(
         }
 
         private fun modeOf(s: StateLocomotion): LocoMode = s.mode
-
-        private fun round3(v: Double): Double = round(v * 1000) / 1000
 
         private fun describe(o: MovementOutcome): String = when (o) {
             MovementOutcome.FINISHED -> "finished"

@@ -139,6 +139,7 @@ public class MovementResult internal constructor(
 
     override fun toString(): String =
         "$outcome${done?.let { " after ${round3(it)} ${movement.unit} of ${round3(movement.amount)}" } ?: ""}: $detail"
-
-    private fun round3(v: Double): String = (kotlin.math.round(v * 1000) / 1000).toString()
 }
+
+/** [v] to three decimals, for people (how much of a movement was done). */
+internal fun round3(v: Double): String = (kotlin.math.round(v * 1000) / 1000).toString()

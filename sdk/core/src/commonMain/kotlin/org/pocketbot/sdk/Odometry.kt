@@ -3,6 +3,7 @@ package org.pocketbot.sdk
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
+import org.pocketbot.protocol.Settings
 import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.math.PI
@@ -114,7 +115,7 @@ public class Odometry internal constructor(private val link: LinkPort, private v
     private fun totalRight(right: Int): Long = carryRight + (right - baseRight)
 
     // From the decoded settings struct: read on every state update, so no per-field decoding here.
-    private fun metresPerPulse(): Double = settings.store.values.value.let { PI * it.geometry.wheelDiameterM / it.encoder.pulsesPerRev }
+    private fun metresPerPulse(): Double = settings.store.values.value.metresPerPulse
     private fun wheelBase(): Double = settings.store.values.value.geometry.wheelBaseM.toDouble()
 
     internal fun update(encoders: StateEncoders, timeMs: Long) {
@@ -170,3 +171,6 @@ internal fun wrapAngle(rad: Double): Double {
         else -> r
     }
 }
+
+/** How far a wheel rolls per encoder pulse, in metres, with this geometry and encoder. */
+internal val Settings.metresPerPulse: Double get() = PI * geometry.wheelDiameterM / encoder.pulsesPerRev

@@ -144,21 +144,22 @@ public class EnumSetting<E : Enum<E>> internal constructor(
 
     override val rangeText: String get() = names.joinToString()
 
-    override fun parse(text: String): E = values.firstOrNull { it.name.equals(text.trim(), ignoreCase = true) }
+    override fun parse(text: String): E = valueNamed(text)
         ?: throw IllegalArgumentException("$name is one of ${names.joinToString()}, not \"$text\"")
 
     override fun format(value: E): String = value.name.lowercase()
 
     /** The name of the value with wire [code], or null when none of [values] has it. */
-    internal fun nameOf(code: Int): String? = values.firstOrNull { codeOf(it) == code }?.let(::format)
+    internal fun nameOf(code: Int): String? = valueWithCode(code)?.let(::format)
 
     /** The wire code of the value called [name] (as [parse] reads it), or null. */
-    internal fun codeOfName(name: String): Int? = values.firstOrNull { it.name.equals(name.trim(), ignoreCase = true) }?.let(codeOf)
+    internal fun codeOfName(name: String): Int? = valueNamed(name)?.let(codeOf)
 
-    override fun decode(settings: ByteArray): E {
-        val code = readNumber(settings, info.offset, info.type).toInt()
-        return values.firstOrNull { codeOf(it) == code } ?: values.first()
-    }
+    private fun valueNamed(text: String): E? = values.firstOrNull { it.name.equals(text.trim(), ignoreCase = true) }
+
+    private fun valueWithCode(code: Int): E? = values.firstOrNull { codeOf(it) == code }
+
+    override fun decode(settings: ByteArray): E = valueWithCode(readNumber(settings, info.offset, info.type).toInt()) ?: values.first()
 
     override fun encode(value: E, out: ByteArray): Unit = writeNumber(out, 0, info.type, codeOf(value), name)
 }

@@ -12,7 +12,6 @@ import kotlinx.coroutines.yield
 import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SyncMode
-import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.math.sqrt
 import kotlin.time.Duration
@@ -176,10 +175,7 @@ public class Tuner(private val robot: Robot) {
      * The movement of a robot speed step test, once the robot has it: the setpoint follows its speed profile. A flow
      * rather than a plain field, because the step test sets it while other threads read the setpoint.
      */
-    private val profileFlow = MutableStateFlow<SpeedProfile?>(null)
-    private var profile: SpeedProfile?
-        get() = profileFlow.value
-        set(value) { profileFlow.value = value }
+    private val profile = MutableStateFlow<SpeedProfile?>(null)
 
     /** The step [stepTest] asks of the controller now (its cruise speed, or 0 after it), or null while no step test runs. */
     public val stepSetpoint: StateFlow<Double?> = commanded.asStateFlow()
@@ -221,7 +217,7 @@ public class Tuner(private val robot: Robot) {
     private fun setpointOf(controller: Controller, state: RobotState): Double {
         val step = commanded.value
         // Until the robot has the step's movement it is not asked to move.
-        if (controller == Controller.ROBOT_SPEED && step != null && step != 0.0) return profile?.speedAt(state) ?: 0.0
+        if (controller == Controller.ROBOT_SPEED && step != null && step != 0.0) return profile.value?.speedAt(state) ?: 0.0
         return step ?: when (controller) {
             Controller.ROBOT_SPEED -> when (val m = robot.locomotion.queue.value.firstOrNull()?.movement) {
                 is Movement.Straight -> m.speedMps
@@ -259,7 +255,7 @@ public class Tuner(private val robot: Robot) {
                     val movement = Movement.Straight(size.distanceM, size.speedMps)
                     val handle = robot.locomotion.enqueue(movement)
                     // The robot started it at most a sample ago, from standing still.
-                    profile = SpeedProfile(movement, robot.settings, robot.state.value)
+                    profile.value = SpeedProfile(movement, robot.settings, robot.state.value)
                     handle.await()
                 }
                 Controller.WHEEL_SPEED -> {
@@ -283,7 +279,7 @@ public class Tuner(private val robot: Robot) {
             delay(SETTLE_MS)
         } finally {
             commanded.value = null
-            profile = null
+            profile.value = null
             capture.cancel()
         }
         StepResponse(controller, step, samples.toList(), gains)
@@ -309,7 +305,7 @@ private class SpeedProfile(movement: Movement.Straight, settings: RobotSettings,
     private val accel = settings.profile.accelMps2.value
     private val decel = settings.profile.decelMps2.value
     private val vmin = minOf(settings.profile.minSpeedMps.value, cruise)
-    private val metresPerPulse = PI * settings.geometry.wheelDiameterM.value / settings.encoder.pulsesPerRev.value
+    private val metresPerPulse = settings.store.values.value.metresPerPulse
 
     fun speedAt(state: RobotState): Double {
         val seconds = (state.time.timeMs - start.time.timeMs).coerceAtLeast(0) / 1000.0

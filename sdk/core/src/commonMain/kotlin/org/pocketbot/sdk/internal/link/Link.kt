@@ -230,10 +230,18 @@ internal class Link(
 
     /** Fails [packet] at once while this host watches and only the driver may send it. */
     private fun checkDriving(packet: Packet) {
-        val d = _driving.value
-        if (d.byThisHost || PACKET_SPECS[packet.type]?.watcherOk == true) return
-        throw NotDriverException(identity.value?.name ?: device.name, commandName(packet.type), d.driver)
+        notDriver(packet)?.let { throw it }
     }
+
+    /** Why this host may not send [packet] now (it watches, and only the driver may), or null when it may. */
+    private fun notDriver(packet: Packet): NotDriverException? {
+        val d = _driving.value
+        if (d.byThisHost || PACKET_SPECS[packet.type]?.watcherOk == true) return null
+        return notDriver(packet.type, d.driver)
+    }
+
+    private fun notDriver(packetType: Int, driver: String?) =
+        NotDriverException(identity.value?.name ?: device.name, commandName(packetType), driver)
 
     /**
      * Says goodbye: the robot finishes or drops what this host queued ([queue]), and does not take the closing link
@@ -258,8 +266,8 @@ internal class Link(
     private suspend fun resendInFlight(session: Session) {
         val p = inFlight ?: return
         if (p.answer.isCompleted || !p.wanted()) return
-        if (!_driving.value.byThisHost && PACKET_SPECS[p.packet.type]?.watcherOk != true) {
-            p.answer.completeExceptionally(NotDriverException(identity.value?.name ?: device.name, commandName(p.packet.type), _driving.value.driver))
+        notDriver(p.packet)?.let {
+            p.answer.completeExceptionally(it)
             return
         }
         if (p.everSent && client.alreadyHeld(p.packet)) {
@@ -474,7 +482,7 @@ internal class Link(
                 val p = if (packet.seq != 0) table.find(packet.seq, packet.packetType) else null
                 val refusal = if (packet.code == ErrorCode.NOT_DRIVER.code) {
                     val d = _driving.value // told just before, unless that was lost
-                    NotDriverException(identity.value?.name ?: device.name, commandName(packet.packetType), d.driver.takeIf { !d.byThisHost })
+                    notDriver(packet.packetType, d.driver.takeIf { !d.byThisHost })
                 } else {
                     CommandRefusedException(packet.packetType, packet.code, packet.detail)
                 }
