@@ -2,7 +2,6 @@ package org.pocketbot.sdk.it
 
 import kotlinx.coroutines.flow.first
 import org.junit.jupiter.api.Test
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Movement
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -12,7 +11,7 @@ class TmpIdleCheck {
     fun probe() = withEmulator(world = "open") { emu ->
         for (period in listOf(50, 300)) {
             val robot = connectAll(emu).single()
-            robot.reflector.set(SyncMode.FULL, period.milliseconds)
+            robot.reflector.set(robot.reflector.mode.value, period.milliseconds)
             repeat(4) { robot.locomotion.enqueue(Movement.Straight(0.10, 0.2)); robot.locomotion.enqueue(Movement.Rotate(90.0, 0.2)) }
             robot.locomotion.awaitIdle()
             val idle = robot.odometry.pose.value

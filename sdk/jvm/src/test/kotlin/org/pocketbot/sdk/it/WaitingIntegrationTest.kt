@@ -6,7 +6,6 @@ import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.sdk.ConnectFailedException
 import org.pocketbot.sdk.Fleet
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Locomotion
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
@@ -26,7 +25,7 @@ class WaitingIntegrationTest {
         val robot = connectAll(emu).single()
         val sim = emu.handleOf(robot)
         // States 300 ms apart: the robot stands still and reports its last movement well before the next state.
-        robot.reflector.set(SyncMode.FULL, 300.milliseconds)
+        robot.reflector.set(robot.reflector.mode.value, 300.milliseconds)
         robot.odometry.reset(sim.truePose)
         square.forEach { robot.locomotion.enqueue(it) }
         robot.locomotion.awaitSettled()
