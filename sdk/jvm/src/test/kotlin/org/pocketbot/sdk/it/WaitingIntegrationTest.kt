@@ -14,7 +14,6 @@ import kotlin.math.abs
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
 import kotlin.test.assertTrue
-import kotlin.time.Duration.Companion.milliseconds
 
 /** Waiting that means what it says, on the real firmware: settled odometry, programs longer than the queue. */
 class WaitingIntegrationTest {
@@ -24,8 +23,6 @@ class WaitingIntegrationTest {
     fun afterAwaitSettledOdometryIsWhereTheRobotStoppedAndLaterStatesSaySo() = withEmulator(world = "open") { emu ->
         val robot = connectAll(emu).single()
         val sim = emu.handleOf(robot)
-        // States 300 ms apart: the robot stands still and reports its last movement well before the next state.
-        robot.reflector.set(robot.reflector.mode.value, 300.milliseconds)
         robot.odometry.reset(sim.truePose)
         square.forEach { robot.locomotion.enqueue(it) }
         robot.locomotion.awaitSettled()
