@@ -87,7 +87,7 @@ private suspend fun CoroutineScope.connectWhenReachable(device: TcpRobotDevice):
     val deadline = TimeSource.Monotonic.markNow() + 10.seconds
     while (true) {
         try {
-            return device.connect(this, RobotOptions(settingsCache = InMemorySettingsCache()))
+            return device.connect(this, RobotOptions { settingsCache = InMemorySettingsCache() })
         } catch (e: Exception) {
             if (deadline.hasPassedNow()) throw IllegalStateException("${device.address} not reachable in 10 s", e)
             delay(100.milliseconds)

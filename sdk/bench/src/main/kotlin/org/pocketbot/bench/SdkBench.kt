@@ -143,7 +143,7 @@ private fun connect() {
             emu.start(Speed.Realtime(1.0))
             val ms = runBlocking {
                 delay(100) // let the firmware boot
-                val fleet = Fleet(this, RobotOptions(settingsCache = InMemorySettingsCache()))
+                val fleet = Fleet(this, RobotOptions { settingsCache = InMemorySettingsCache() })
                 val devices = emu.discoverer().discover().toList()
                 val t0 = System.nanoTime()
                 fleet.connectAll(devices)
@@ -175,7 +175,7 @@ private fun realtime() {
         val proxies = emu.robots.map { StampingProxy(it.tcpPort) }
         val devices = emu.robots.mapIndexed { i, r -> org.pocketbot.sdk.transport.TcpRobotDevice("127.0.0.1", proxies[i].port, r.name) }
         val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
-        val fleet = Fleet(scope, RobotOptions(settingsCache = InMemorySettingsCache()))
+        val fleet = Fleet(scope, RobotOptions { settingsCache = InMemorySettingsCache() })
         val robots = runBlocking { fleet.connectAll(devices) }
         val latencies = java.util.concurrent.ConcurrentLinkedQueue<Long>()
         var measuring = false

@@ -15,8 +15,13 @@ fun testOptions(
     syncMode: SyncMode = SyncMode.NONE,
     cache: SettingsCache? = InMemorySettingsCache(),
     commandRetries: Int = 8,
-    reconnect: ReconnectPolicy = ReconnectPolicy(initialDelay = 10.milliseconds, maxDelay = 100.milliseconds),
-): RobotOptions = RobotOptions(syncMode = syncMode, settingsCache = cache, commandRetries = commandRetries, reconnect = reconnect)
+    reconnect: ReconnectPolicy = ReconnectPolicy { initialDelay = 10.milliseconds; maxDelay = 100.milliseconds },
+): RobotOptions = RobotOptions {
+    this.syncMode = syncMode
+    settingsCache = cache
+    this.commandRetries = commandRetries
+    this.reconnect = reconnect
+}
 
 /** The test's own virtual-time scheduler, as the runtime of the SDK's work: tests run on simulated time. */
 fun TestScope.runtime(): RobotRuntime = RobotRuntime(coroutineContext[ContinuationInterceptor] as CoroutineDispatcher, Random(42))

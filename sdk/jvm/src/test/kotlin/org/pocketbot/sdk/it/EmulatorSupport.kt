@@ -17,7 +17,7 @@ import kotlin.time.Duration
 import kotlin.time.Duration.Companion.seconds
 
 /** Options for emulated robots: the defaults users get, with a private settings cache per test. */
-fun itOptions(): RobotOptions = RobotOptions(settingsCache = InMemorySettingsCache())
+fun itOptions(): RobotOptions = RobotOptions { settingsCache = InMemorySettingsCache() }
 
 /**
  * Runs [block] against an embedded emulator with [robots] robots on simulated time: the SDK's clock is the

@@ -98,8 +98,7 @@ class TcpTransportTest {
     fun anOversizedFrameFromTheRobotIsCountedInTheRobotsLinkStats() = test {
         val device = TcpRobotDevice("127.0.0.1", port)
         val scope = this // the robot belongs to the test, not to the async that connects it
-        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions(
-            syncMode = org.pocketbot.protocol.SyncMode.NONE, settingsCache = null)) }
+        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions { syncMode = org.pocketbot.protocol.SyncMode.NONE; settingsCache = null }) }
         val robot = acceptRobot(answersCommands = true)
         val sdk = connecting.await()
         robot.sendRaw(Slip.encode(ByteArray(Frames.MAX_FRAME + 50) { 0x11 }))
@@ -114,8 +113,7 @@ class TcpTransportTest {
     fun aTcpRobotsStateReachesItsFlowOnTheSocketsOwnLoopThread() = test {
         val device = TcpRobotDevice("127.0.0.1", port)
         val scope = this
-        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions(
-            syncMode = org.pocketbot.protocol.SyncMode.NONE, settingsCache = null)) }
+        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions { syncMode = org.pocketbot.protocol.SyncMode.NONE; settingsCache = null }) }
         val robot = acceptRobot(answersCommands = true)
         val sdk = connecting.await()
         val threads = java.util.concurrent.ConcurrentLinkedQueue<String>()

@@ -61,9 +61,10 @@ class LinkTest {
 
     private fun TestScope.link(peer: ScriptedRobot, client: LinkClient): Link {
         // A child of the test: a failing test ends the link too, instead of leaving it to run on virtual time.
-        val job = SupervisorJob(backgroundScope.coroutineContext[Job])
+        val lifetime = Job(backgroundScope.coroutineContext[Job])
+        val job = SupervisorJob(lifetime)
         val serial = runtime().dispatcher.limitedParallelism(1) // as a Robot runs its link
-        return Link(peer.device, testOptions(), serial, CoroutineScope(serial + job), job, DebugLog(), Random(1))
+        return Link(peer.device, testOptions(), serial, CoroutineScope(serial + job), job, lifetime, DebugLog(), Random(1))
             .also { it.client = client }
     }
 
