@@ -17,8 +17,7 @@ import org.pocketbot.sdk.transport.EmulatorDiscoverer
 import org.pocketbot.sdk.transport.MergedDiscoverer
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.SerialDiscoverer
-import org.pocketbot.sdk.transport.SerialRobotDevice
-import org.pocketbot.sdk.transport.TcpRobotDevice
+import org.pocketbot.sdk.transport.RobotAddress
 import java.nio.file.Files
 import java.nio.file.Paths
 import kotlin.time.Duration
@@ -59,19 +58,13 @@ class Sources(private val host: String, private val controlPort: Int, private va
     }
 }
 
-private val TCP_ADDRESS = Regex("""tcp://(\[[0-9A-Fa-f:.]+]|[^:/\[\]]+):(\d{1,5})""")
-
 /**
  * The robot at [address] when it is one a person can type without a scan: `tcp://HOST:PORT` (an emulated robot, a
- * serial-to-TCP bridge) or `serial:PATH`; null for anything else.
+ * serial-to-TCP bridge) or `serial:PATH` (see [RobotAddress]); null for anything else (a name, an id).
+ *
+ * @throws IllegalArgumentException for an address of those kinds that is not right (no port, say): what is wrong.
  */
-fun deviceAt(address: String): RobotDevice? {
-    TCP_ADDRESS.matchEntire(address)?.let { m ->
-        val port = m.groupValues[2].toInt().takeIf { it in 1..65535 } ?: return null
-        return TcpRobotDevice(m.groupValues[1].removePrefix("[").removeSuffix("]"), port)
-    }
-    return address.removePrefix("serial:").takeIf { address.startsWith("serial:") && it.isNotEmpty() }?.let { SerialRobotDevice(it) }
-}
+fun deviceAt(address: String): RobotDevice? = if (RobotAddress.isAddress(address)) RobotAddress.parse(address) else null
 
 /**
  * Finds the robots [names] (each a name, an address, or a numeric id) among [found] and connects them, or every

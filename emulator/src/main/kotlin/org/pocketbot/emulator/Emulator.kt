@@ -12,6 +12,8 @@ import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
 import org.pocketbot.sdk.transport.Discoverer
+import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.withTimeoutOrNull
 import java.net.InetAddress
 import java.security.MessageDigest
 import java.nio.ByteBuffer
@@ -95,6 +97,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     private var serialNs = 0L
     private val modes = StepModeChooser(config.threads, config.parallelFrom) { (stepper.takeCounts() + " serial part ${serialNs / 1000} us").also { serialNs = 0 } }
     private var nowTicks = 0L
+    private val stepWaiters = ArrayList<CompletableDeferred<Unit>>()
 
     @Volatile private var loop: Thread? = null
     @Volatile private var running = false
@@ -224,6 +227,24 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         serialNs += end - phaseEnd
         if (rs === sim.robots) modes.record(parallel, end - start, n, 1)
         nowTicks = t1
+        if (stepWaiters.isNotEmpty()) {
+            stepWaiters.forEach { it.complete(Unit) }
+            stepWaiters.clear()
+        }
+    }
+
+    /**
+     * Whether something steps this emulator: its own thread ([start]), or a step within [timeout] (a simulated run,
+     * a test stepping it). A connection to a robot of an emulator that nothing steps would wait for answers that
+     * never come: [org.pocketbot.emulator.transport.InProcessDevice] says so instead.
+     */
+    internal suspend fun isStepped(timeout: Duration): Boolean {
+        if (loop != null) return true
+        val next = CompletableDeferred<Unit>()
+        synchronized(lock) { stepWaiters += next }
+        val stepped = withTimeoutOrNull(timeout) { next.await() } != null
+        if (!stepped) synchronized(lock) { stepWaiters -= next }
+        return stepped || loop != null
     }
 
     private fun phaseA(r: SimRobot, t0: Long, t1: Long) {

@@ -127,9 +127,42 @@ public class Fleet(scope: CoroutineScope, private val options: RobotOptions) : A
         launched.associate { (robot, d) -> robot to d.await() }
     }
 
+    /**
+     * Runs a movement program on each robot, all starting at the same moment: the first movements go out together
+     * (as [enqueueTogether] sends them), the rest follow on each robot as its queue drains (see [Locomotion.runProgram]:
+     * programs longer than [Locomotion.QUEUE_CAPACITY] are fed as the robot works through them). Suspends until
+     * every program ended; returns how each movement ended, per robot, in program order. A robot whose movement does
+     * not finish runs no more of its program; the others go on.
+     *
+     * ```
+     * val square = List(4) { listOf(Movement.Straight(0.2, 0.1), Movement.Rotate(90.0, 0.1)) }.flatten()
+     * fleet.runTogether(robots.associateWith { square })
+     * fleet.awaitSettled()
+     * ```
+     */
+    public suspend fun runTogether(programs: Map<Robot, List<Movement>>): Map<Robot, List<MovementResult>> {
+        val first = enqueueTogether(programs.filterValues { it.isNotEmpty() }.mapValues { it.value.first() })
+        return coroutineScope {
+            programs.map { (robot, program) ->
+                robot to async {
+                    val queued = listOfNotNull(first[robot])
+                    robot.locomotion.feed(queued, program.drop(queued.size).iterator())
+                }
+            }.associate { (robot, results) -> robot to results.await() }
+        }
+    }
+
     /** Suspends until every robot finished the movements this host queued. */
     public suspend fun awaitIdle() {
         coroutineScope { _robots.value.map { async { it.locomotion.awaitIdle() } }.awaitAll() }
+    }
+
+    /**
+     * Suspends until every robot finished the movements this host queued and then reported a state at rest, so that
+     * each one's odometry holds where it stopped (see [Locomotion.awaitSettled]).
+     */
+    public suspend fun awaitSettled() {
+        coroutineScope { _robots.value.map { async { it.locomotion.awaitSettled() } }.awaitAll() }
     }
 
     /** Stops every robot (clears the queues). */

@@ -301,7 +301,7 @@ public class Robot internal constructor(
         lineSensor.update(state.line)
         motors.update(state.wheels)
         odometry.update(state.encoders, state.time.timeMs)
-        locomotion.watch(state.encoders, state.time.timeMs)
+        locomotion.watch(state.encoders, state.time.timeMs, atRest = state.wheels.speedLeftMmps == 0 && state.wheels.speedRightMmps == 0)
         if (kind == StateUpdate.Kind.FULL) {
             firstFullState.complete(Unit)
             locomotion.update(state.locomotion, state.time.timeMs)

@@ -55,7 +55,7 @@ class TrajectoryTest {
         val points = robot.odometry.trajectory.points.value
         assertEquals(listOf(0L, 2L, 3L, 4L), points.map { it.timeMs }, "the first state is the start; standing still adds nothing")
         assertEquals(robot.odometry.pose.value, points.last().pose)
-        robot.odometry.trajectory.clear()
+        robot.odometry.clearTrajectory()
         assertTrue(robot.odometry.trajectory.points.value.isEmpty())
         robot.close()
     }
