@@ -14,7 +14,7 @@
 #   make push        thesis A.2: two robots push a heavy box off the track (host-coordinated), simulated time
 #   make track       thesis A.3: three robots on a track, the behaviour in their firmware, simulated time
 #   make emulator    run the emulator CLI, e.g. make emulator ARGS="--robots 3"
-#   make jvm         mvn package of the reactor (no tests), after the firmware wasm
+#   make jvm         mvn package of the reactor (no tests), after the firmware wasm and native engine
 #   make bench | bench-emulator | profile-emulator | bench-sdk | bench-bluetooth | bench-desktop | fuzz | clean
 
 MVN       ?= mvn -B
@@ -46,6 +46,8 @@ FUZZ_TEST           ?= *FuzzTest
 FUZZ_MODULE         ?= sdk/jvm
 
 WASM := firmware/build/wasm/pocketbot.wasm
+# The emulator's native engine, made from that wasm (firmware/native/engine.c); Maven puts it in the emulator's jar.
+NATIVE_ENGINE := $(wildcard firmware/build/native/lib/*/libpocketbot-firmware.so)
 
 # The published libraries (and their parent POM and BOM), and the folder `make publish` deploys them to: a Maven
 # repository on disk, never ~/.m2 (install is skipped; the local repository is shared with other builds).
@@ -73,8 +75,9 @@ deps:
 firmware: deps
 	$(MAKE) -C firmware all
 
+# The firmware as the emulator runs it: the wasm, and the native engine made from it.
 wasm: deps
-	$(MAKE) -C firmware wasm
+	$(MAKE) -C firmware wasm native-engine
 
 protocol-check: deps
 	$(PYTHON) protocol/gen.py --check
@@ -89,7 +92,7 @@ test: deps
 	@bash scripts/ensure-bumble.sh >/dev/null
 	$(MAKE) --no-print-directory protocol-check
 	$(MAKE) -C firmware test
-	$(MAKE) -C firmware wasm
+	$(MAKE) -C firmware wasm native-engine
 	rm -rf target/repository
 	$(MAVEN) -fae deploy $(call publish_to,target/repository)
 	$(MAKE) --no-print-directory outside-sample PUBLISH_REPO=target/repository
@@ -110,11 +113,11 @@ docs: wasm
 
 # Packages examples and everything it needs (emulator, sdk); skips tests and the Kotlin/JS gate,
 # which `make test` covers.
-$(RUN_STAMP): $(JVM_INPUTS) $(wildcard $(WASM))
+$(RUN_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl examples -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
-$(PANEL_STAMP): $(JVM_INPUTS) $(wildcard $(WASM))
+$(PANEL_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl desktop-app -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
@@ -131,17 +134,17 @@ EMULATOR_CLI_STAMP := emulator/cli/target/classpath.txt
 EMULATOR_INPUTS := $(shell find pom.xml .mvn library sdk/protocol sdk/core emulator -name target -prune -o -type f \
                      \( -name '*.kt' -o -name 'pom.xml' -o -name '*.json' -o -name 'jvm.config' \) -print 2>/dev/null)
 
-$(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM))
+$(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
-$(EMULATOR_CLI_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM))
+$(EMULATOR_CLI_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl emulator/cli -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
 CLI_STAMP := cli/target/classpath.txt
 
-$(CLI_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(shell find cli -name target -prune -o -type f -print 2>/dev/null)
+$(CLI_STAMP): $(JVM_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE) $(shell find cli -name target -prune -o -type f -print 2>/dev/null)
 	$(MAVEN) package -pl cli -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
@@ -190,13 +193,17 @@ bench: bench-emulator bench-sdk bench-bluetooth bench-desktop
 
 bench-emulator: wasm
 	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
-	$(JAVA) -XX:-DontCompileHugeMethods -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
+	$(MAKE) -C firmware native-fleet
+	$(JAVA) -XX:-DontCompileHugeMethods -Dpocketbot.bench.native=firmware/build/native/fleet -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(ARGS)
 
-# Where a robot-millisecond goes: the emulator benchmark under Java Flight Recorder (1 ms CPU samples), then the
-# samples by category (firmware, line sensor geometry, IR, collisions, physics, link, stepping). ARGS: fleet sizes.
+# Where a robot-millisecond goes: the emulator benchmark under Java Flight Recorder (1 ms CPU samples, Java and native
+# code), then the samples by category (firmware, line sensor geometry, IR, collisions, physics, link, stepping).
+# ARGS: fleet sizes; PROFILE_ENGINE: native or chicory. One stepping thread: JFR samples one thread in native code a period.
+PROFILE_ENGINE ?= native
 profile-emulator: wasm
 	@$(MAKE) --no-print-directory $(EMULATOR_STAMP)
-	$(JAVA) -XX:-DontCompileHugeMethods "-XX:StartFlightRecording=filename=emulator/target/emulator-profile.jfr,settings=profile,jdk.ExecutionSample#period=1ms" \
+	$(JAVA) -XX:-DontCompileHugeMethods "-XX:StartFlightRecording=filename=emulator/target/emulator-profile.jfr,settings=profile,jdk.ExecutionSample#period=1ms,jdk.NativeMethodSample#period=1ms" \
+	  -Dpocketbot.bench.engines=$(PROFILE_ENGINE) -Dpocketbot.bench.threads=1 \
 	  -cp "$(call cp_of,emulator)" $(BENCH_EMULATOR_MAIN) $(or $(ARGS),1000)
 	PATH="$$(dirname $$(readlink -f $$(command -v $(JAVA))))":$$PATH $(PYTHON) scripts/emulator-profile-breakdown.py emulator/target/emulator-profile.jfr
 

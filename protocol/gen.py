@@ -5,8 +5,8 @@
     python3 protocol/gen.py --check  fail (exit 1) when any generated file is stale
 
 The work is done by the package protocol/generator: model.py reads the schema, and one emitter per output
-writes the firmware's C header and tables, the SDK's Kotlin codecs, docs/protocol.md, the golden byte
-vectors (protocol/golden/vectors.json) and the tests that decode them on every side (C, Kotlin common,
+writes the firmware's C header and tables, the SDK's Kotlin codecs, the SDK's public state model and settings tree
+(sdk_model.py, sdk_settings.py), docs/protocol.md, the golden byte vectors (protocol/golden/vectors.json) and the tests that decode them on every side (C, Kotlin common,
 Javolution Struct on the JVM).
 """
 import sys

@@ -4,9 +4,11 @@
     make profile-emulator ARGS="1000"      # records target/emulator-<N>.jfr and prints this breakdown
     scripts/emulator-profile-breakdown.py recording.jfr
 
-Reads `jfr print --events jdk.ExecutionSample` (the JDK's own tool) and prints one line per category with its
-share of the samples. The top frame decides, so time in a callee is its own (a host call from the firmware to the
-line sensor counts as line sensor geometry, not as firmware).
+Reads `jfr print --events jdk.ExecutionSample,jdk.NativeMethodSample` (the JDK's own tool) and prints one line per
+category with its share of the samples. The top frame decides, so time in a callee is its own. A thread in the native
+firmware engine is sampled as a native method sample whose top frame is the JNI call into it (NativeEngine.*); JFR
+samples at most one thread in native code per period, so the native engine's share is exact with one stepping
+thread (`make profile-emulator` runs one).
 """
 import collections
 import re
@@ -15,11 +17,14 @@ import subprocess
 import sys
 
 CATEGORIES = [  # (category, regex on "Class.method" of the top frame), first match wins
-    ("firmware (wasm under Chicory, incl. export/host call glue)",
-     r"^(org\.pocketbot\.emulator\.firmware\.|com\.dylibso\.chicory\.)"),
-    ("line sensor and colour geometry", r"^org\.pocketbot\.emulator\.(world\.Surface|SimRobot\.(lineAdcSweep|computeSpots|sensorRead))"),
-    ("IR between robots and obstacles", r"^org\.pocketbot\.emulator\.SimWorld\.(exchangeIr|deliverTo)|SimRobot\.(irSend|irHeard)"),
-    ("collisions and box contacts", r"^org\.pocketbot\.emulator\.(SimWorld\.(separateRobots|checkContacts|resolvePushes|buildGrid|afterStep)|physics\.Obb)"),
+    ("firmware, native engine (machine code, JNI calls in)", r"^org\.pocketbot\.emulator\.firmware\.NativeEngine\."),
+    ("firmware (wasm under Chicory, incl. export glue)",
+     r"^(org\.pocketbot\.emulator\.firmware\.(Chicory|LinearMemory|FirmwareModule)|com\.dylibso\.chicory\.)"),
+    ("firmware memory accessors (sensor inputs, outputs, events)",
+     r"^(org\.pocketbot\.emulator\.firmware\.|java\.nio\.)"),
+    ("line sensor and colour geometry", r"^org\.pocketbot\.emulator\.(world\.Surface|SimRobot\.(computeSpots|sense))"),
+    ("IR between robots and obstacles", r"^org\.pocketbot\.emulator\.SimWorld\.(exchangeIr|deliverTo)|SimRobot\.(afterFirmware|irHeard)"),
+    ("collisions, box contacts, who is alone", r"^org\.pocketbot\.emulator\.(SimWorld\.(separateRobots|checkContacts|resolvePushes|buildGrid|afterStep|markAlone|nearBox)|physics\.Obb)"),
     ("robot physics (motion, encoders, battery)", r"^org\.pocketbot\.emulator\.SimRobot\."),
     ("link model", r"^org\.pocketbot\.emulator\.link\."),
     ("stepping and synchronization", r"^(org\.pocketbot\.emulator\.(internal\.ParallelStepper|Emulator\.)|java\.lang\.Thread\.|java\.util\.concurrent\.|jdk\.internal\.misc\.)"),
@@ -29,7 +34,7 @@ CATEGORIES = [  # (category, regex on "Class.method" of the top frame), first ma
 
 def main(path: str) -> None:
     jfr = shutil.which("jfr") or "jfr"
-    out = subprocess.run([jfr, "print", "--events", "jdk.ExecutionSample", "--stack-depth", "1", path],
+    out = subprocess.run([jfr, "print", "--events", "jdk.ExecutionSample,jdk.NativeMethodSample", "--stack-depth", "1", path],
                          check=True, capture_output=True, text=True).stdout
     tops = re.findall(r"stackTrace = \[\s*\n\s*([\w.$<>]+)\(", out)
     counts = collections.Counter()

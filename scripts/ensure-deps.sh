@@ -8,6 +8,8 @@ PACKAGES=(
   # firmware: ATxmega128A3 build, cycle counts on simavr, WebAssembly build for the emulator
   gcc-avr avr-libc binutils-avr simavr
   clang lld libclang-rt-14-dev libclang-rt-14-dev-wasm32
+  # the emulator's native engine and the benchmark's native reference: the same wasm turned into C (wasm2c)
+  wabt
   # host tools: serial/pty plumbing, protocol generator, BlueZ D-Bus mock for the SDK tests
   socat python3 python3-dbusmock dbus make
   # the virtual Bluetooth controllers: Bumble in a venv of its own (scripts/ensure-bumble.sh)

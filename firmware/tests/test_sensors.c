@@ -21,14 +21,15 @@ static void sensor_values_reach_the_state(void)
     world.sensors[SIM_SENSOR_BATTERY_MV] = 3750;
     world.sensors[SIM_SENSOR_CURRENT_MA] = 180;
     world.sensors[SIM_SENSOR_MCU_TEMP_DC] = -55;
-    world.sensors[SIM_SENSOR_ACCEL_X_MG] = 100000; /* out of range: clamped */
+    world.sensors[SIM_SENSOR_ACCEL_X_MG] = 100000; /* out of range: clamped by the HAL's sensor model */
     world.sensors[SIM_SENSOR_ACCEL_Y_MG] = -20;
     world.sensors[SIM_SENSOR_ACCEL_Z_MG] = 990;
     world.colour[0] = 200; world.colour[1] = 40; world.colour[2] = 40; world.colour[3] = 999;
     world_run_ms(10);
     CHECK(robot_state.power.battery_mv == 3750 && robot_state.power.current_ma == 180 &&
               robot_state.power.mcu_temp_dc == -55, "power");
-    CHECK(robot_state.accel.x_mg == 32767 && robot_state.accel.y_mg == -20 && robot_state.accel.z_mg == 990, "accel");
+    CHECK(robot_state.accel.x_mg == 16000 && robot_state.accel.y_mg == -20 && robot_state.accel.z_mg == 990,
+          "accel, x clamped to the accelerometer's range: %d", robot_state.accel.x_mg);
     CHECK(robot_state.colour.red == 200 && robot_state.colour.clear == 255 &&
               robot_state.colour.detected == PB_COLOUR_RED, "colour");
 }

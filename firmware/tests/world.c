@@ -13,6 +13,8 @@ int host_frame_count;
 int host_bad_frames;
 static slip_decoder_t host_rx;
 static void take(int32_t max);
+static void sense(void);
+static void advance(int64_t t);
 
 #define TICKS_PER_S 32000000.0
 #define WHEEL_D 0.009
@@ -61,6 +63,7 @@ void world_power_on(int32_t robot_id)
         slip_decoder_init(&link_hosts[k].rx);
     }
     sim_host_eeprom_erase();
+    sense();
     sim_init(robot_id);
 }
 
@@ -98,7 +101,7 @@ static void step(double dt)
         while (world.pos[w] >= world.next_edge[w]) {
             double frac = (world.next_edge[w] - old) / (world.pos[w] - old);
             int64_t t = t0 + (int64_t)(frac * dt * TICKS_PER_S);
-            sim_advance(t);
+            advance(t);
             sim_encoder_edge(w, t);
             world.prev_edge[w] = world.next_edge[w];
             world.edge_index[w]++;
@@ -107,7 +110,7 @@ static void step(double dt)
         while (world.pos[w] < world.prev_edge[w]) {
             double frac = (old - world.prev_edge[w]) / (old - world.pos[w]);
             int64_t t = t0 + (int64_t)(frac * dt * TICKS_PER_S);
-            sim_advance(t);
+            advance(t);
             sim_encoder_edge(w, t);
             world.next_edge[w] = world.prev_edge[w];
             world.edge_index[w]--;
@@ -120,7 +123,7 @@ static void step(double dt)
     world.y += v * sin(world.theta) * dt;
     world.theta += om * dt;
     world.now = t0 + (int64_t)(dt * TICKS_PER_S);
-    sim_advance(world.now);
+    advance(world.now);
 }
 
 static void take_link(int link, int32_t max);
@@ -138,59 +141,57 @@ void world_run_ms(int ms)
     }
 }
 
-/* ---- imports of sim_abi.h ---- */
+/* ---- sensors and IR as data (sim_abi.h) ---- */
 
 static int spot_on_line(int spot)
 {
     if (!world.line_enabled)
         return 0;
     double lateral = (3.5 - spot) * SPOT_PITCH; /* spot 0 is leftmost: +y in the robot frame */
-    double sx = world.x + SENSOR_AHEAD * cos(world.theta) - lateral * sin(world.theta);
     double sy = world.y + SENSOR_AHEAD * sin(world.theta) + lateral * cos(world.theta);
-    (void)sx;
     return fabs(sy - world.line_y) <= world.line_width / 2.0;
 }
 
-static int32_t detector_adc(int32_t detector, int32_t emitters)
+/* What the sensors face now: a lit emitter adds 100 over the floor and 2000 over the line, no noise. */
+static void sense(void)
 {
-    int32_t v = world.ambient;
-    for (int k = 0; k < 2; k++) {
-        int emitter = detector + k;
-        int spot = 2 * detector + k;
-        if (emitters & (1 << emitter))
-            v += spot_on_line(spot) ? 2000 : 100;
+    sim_inputs_t *in = sim_host_inputs();
+    in->noise = 0;
+    in->line_ambient_adc = world.ambient;
+    in->line_white_adc = 100;
+    in->line_span_adc = 1900;
+    in->line_noise_adc = 0;
+    for (int j = 0; j < 8; j++)
+        in->line_dark[j] = spot_on_line(j);
+    for (int s = 0; s < SIM_SENSOR_COLOUR_R; s++)
+        in->sensor[s] = world.sensors[s];
+    for (int c = 0; c < 4; c++)
+        in->sensor[SIM_SENSOR_COLOUR_R + c] = world.colour[c];
+}
+
+/* The IR messages the firmware sent, and which emitters it lights. */
+static void observe(void)
+{
+    sim_ir_out_t *out = sim_host_ir_out();
+    for (int i = 0; i < out->count && world.ir_count < WORLD_MAX_IR; i++) {
+        const sim_ir_msg_t *m = &out->msg[i];
+        world.ir[world.ir_count].sender = m->sender_id;
+        world.ir[world.ir_count].led = m->led;
+        world.ir[world.ir_count].power = m->power;
+        world.ir[world.ir_count].len = m->len;
+        world.ir[world.ir_count].lo = (uint32_t)m->payload_lo;
+        world.ir[world.ir_count].hi = (uint32_t)m->payload_hi;
+        world.ir_count++;
     }
-    return v > 4095 ? 4095 : v;
+    out->count = 0;
+    world.emitter_masks_seen |= 1 << sim_host_outputs()->line_emitters;
 }
 
-int64_t line_adc_sweep(int32_t emitters)
+static void advance(int64_t t)
 {
-    if (emitters >= 0 && emitters < 32)
-        world.emitter_masks_seen |= 1 << emitters;
-    uint64_t sweep = 0;
-    for (int32_t d = 0; d < 4; d++)
-        sweep |= (uint64_t)(uint16_t)detector_adc(d, emitters) << (16 * d);
-    return (int64_t)sweep;
-}
-
-int32_t sensor_read(int32_t sensor)
-{
-    if (sensor >= SIM_SENSOR_COLOUR_R && sensor <= SIM_SENSOR_COLOUR_CLEAR)
-        return world.colour[sensor - SIM_SENSOR_COLOUR_R];
-    return (sensor >= 0 && sensor < 10) ? world.sensors[sensor] : 0;
-}
-
-void ir_send(int32_t sender_id, int32_t led, int32_t power, int32_t len, int32_t payload_lo, int32_t payload_hi)
-{
-    if (world.ir_count >= WORLD_MAX_IR)
-        return;
-    world.ir[world.ir_count].sender = sender_id;
-    world.ir[world.ir_count].led = led;
-    world.ir[world.ir_count].power = power;
-    world.ir[world.ir_count].len = len;
-    world.ir[world.ir_count].lo = (uint32_t)payload_lo;
-    world.ir[world.ir_count].hi = (uint32_t)payload_hi;
-    world.ir_count++;
+    sense();
+    sim_advance(t);
+    observe();
 }
 
 /* ---- host link ---- */

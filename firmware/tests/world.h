@@ -1,7 +1,7 @@
 /**
  * \file world.h
- * A small physical world for host tests and the fuzzer: it implements the emulator's imports of
- * sim_abi.h (line_adc_sweep, sensor_read, ir_send), simulates two motors with first-order dynamics and a dead
+ * A small physical world for host tests and the fuzzer: it does the emulator's part of sim_abi.h (the sensors'
+ * inputs, the IR messages sent), simulates two motors with first-order dynamics and a dead
  * band, single-channel encoders with unequal stripes, a robot pose, a line on the floor, and a host link.
  */
 #ifndef WORLD_H
@@ -36,11 +36,11 @@ typedef struct {
     double line_y, line_width;
     int ambient;          /* ambient light reading */
     int colour[4];        /* r, g, b, clear seen by the colour sensor */
-    int sensors[10];      /* battery etc. as sensor_read returns them */
+    int sensors[6];       /* battery, current, temperature, accelerometer x y z (sim_inputs_t.sensor) */
     /* IR messages the robot sent */
     struct { int sender, led, power, len; uint32_t lo, hi; } ir[WORLD_MAX_IR];
     int ir_count;
-    int emitter_masks_seen; /* bit m set when line_adc_sweep saw emitter mask m (m < 32) */
+    int emitter_masks_seen; /* bit m set when the line sensor's emitters in mask m (m < 32) were seen lit */
     int64_t now;
     int link_bytes_per_ms; /* how fast the host drains the link */
     int stuck_links;       /* bit k: the host of link k reads nothing (world_run_ms leaves its bytes waiting) */
@@ -51,6 +51,8 @@ extern world_t world;
 /* Host builds of hal_sim.c: pointers instead of the int32 linear-memory addresses. */
 const sim_outputs_t *sim_host_outputs(void);
 const uint8_t *sim_host_tx_buffer(void);
+sim_inputs_t *sim_host_inputs(void);
+sim_ir_out_t *sim_host_ir_out(void);
 sim_event_t *sim_host_events(void);
 void sim_host_eeprom_erase(void);
 /* The next main loop tick lasts `us` longer than its code (which takes no simulated time). */

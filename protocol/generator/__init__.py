@@ -4,7 +4,7 @@ Each emitter module names its output path(s) and returns {path relative to the r
 import tomllib
 from pathlib import Path
 
-from . import c_code, c_golden, docs, fuzz_seeds, golden, javolution, kotlin_codecs, kotlin_golden, sdk_settings
+from . import c_code, c_golden, docs, fuzz_seeds, golden, javolution, kotlin_codecs, kotlin_golden, sdk_model, sdk_settings
 from .model import Model
 
 
@@ -17,7 +17,8 @@ def generate(model):
     outputs = {}
     for part in (c_code.emit(model), c_golden.emit(model, vectors), kotlin_codecs.emit(model),
                  kotlin_golden.emit(model, vectors), javolution.emit(model, vectors), docs.emit(model),
-                 golden.emit(model, vectors), fuzz_seeds.emit(model, vectors), sdk_settings.emit(model)):
+                 golden.emit(model, vectors), fuzz_seeds.emit(model, vectors), sdk_settings.emit(model),
+                 sdk_model.emit(model)):
         assert not set(part) & set(outputs), "two emitters write the same file"
         outputs.update(part)
     return outputs

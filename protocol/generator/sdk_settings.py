@@ -84,7 +84,6 @@ def emit(model):
         props.append((g.get("doc", ""), camel(gname), cls, args))
 
     o = [f"// {header}", "package org.pocketbot.sdk", ""]
-    o += [f"import org.pocketbot.protocol.{e}" for e in sorted(used_enums)]
     o += ["import org.pocketbot.sdk.internal.SettingsMirror", "import org.pocketbot.sdk.internal.link.LinkPort", ""]
     o += ["/**",
           " * Settings reflection (thesis 6.3, 9.6): a typed tree of every setting of the robot, mirrored on the host.",

@@ -1,7 +1,8 @@
 /**
  * \file hal_sim.c
  * The HAL inside the emulator (WebAssembly): the emulator drives time with sim_advance() and delivers
- * interrupts through the exports of sim_abi.h; sensors and the IR transmitter are imports.
+ * interrupts through the exports of sim_abi.h; it writes what the sensors face into `inputs` before each step, and
+ * takes the IR messages sent from `ir_out` after it (sim_abi.h): the firmware makes no call out of the instance.
  *
  * Time: MCU ticks at 32 MHz (int64). hal_micros() = ticks / 32, capture timestamps = ticks / 8 (4 MHz).
  * sim_advance() fires due compare interrupts in time order, each at its own time, and after each one runs
@@ -37,6 +38,9 @@ static uint8_t eeprom[HAL_EEPROM_SIZE] = {[0 ... HAL_EEPROM_SIZE - 1] = 0xFF};
 static int64_t stretch_ticks; /* how much longer than its code the next main loop tick lasts */
 static uint8_t tx_out[256];
 static uint8_t irq_enabled;
+_Static_assert((int)SIM_SENSOR_COUNT == (int)HAL_SENSOR_COUNT, "sim_abi.h and hal.h number the sensors alike");
+static sim_inputs_t inputs;
+static sim_ir_out_t ir_out;
 
 /* ---- board ---- */
 
@@ -118,12 +122,48 @@ void hal_line_emitters(uint8_t mask)
     outputs.line_emitters = (uint8_t)(mask & 0x1Fu);
 }
 
+/* ---- sensors: the emulator's sensor model on the values in `inputs` (sim_abi.h) ---- */
+
+/* Kotlin's Double.toInt(): towards zero, saturating, NaN to 0 (a plain cast would trap in WebAssembly). */
+static int32_t trunc_sat(double v)
+{
+    if (v != v)
+        return 0;
+    if (v >= 2147483647.0)
+        return INT32_MAX;
+    if (v <= -2147483648.0)
+        return INT32_MIN;
+    return (int32_t)v;
+}
+
+static int32_t clamp_i32(int32_t v, int32_t lo, int32_t hi)
+{
+    return v < lo ? lo : v > hi ? hi : v;
+}
+
+/* A standard normal sample, roughly (Irwin-Hall of four 16-bit uniforms), from the robot's splitmix64 stream. */
+static double gauss(void)
+{
+    uint64_t z = (inputs.noise_state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    int64_t sum = (int64_t)((z & 0xFFFFu) + ((z >> 16) & 0xFFFFu) + ((z >> 32) & 0xFFFFu) + (z >> 48));
+    return (double)(sum - 131070) * (1.0 / (65536.0 * 0.5773502691896257)); /* sqrt(4.0 / 12.0), to the last bit */
+}
+
 void hal_line_convert(void)
 {
-    uint64_t sweep = (uint64_t)line_adc_sweep(outputs.line_emitters);
+    uint8_t lit = outputs.line_emitters;
     for (uint8_t d = 0; d < HAL_LINE_DETECTORS; d++) {
-        uint16_t v = (uint16_t)(sweep >> (16 * d));
-        line_result[d] = v > 4095 ? 4095 : v;
+        double v = inputs.line_ambient_adc;
+        if (lit & (1u << d))
+            v += inputs.line_white_adc + inputs.line_span_adc * inputs.line_dark[2 * d];
+        if (lit & (1u << (d + 1)))
+            v += inputs.line_white_adc + inputs.line_span_adc * inputs.line_dark[2 * d + 1];
+        if (inputs.noise)
+            v += gauss() * inputs.line_noise_adc;
+        line_result[d] = (uint16_t)clamp_i32(trunc_sat(v), 0, 4095);
     }
 }
 
@@ -134,7 +174,18 @@ void hal_line_results(uint16_t out[HAL_LINE_DETECTORS])
 
 int32_t hal_sensor_read(uint8_t sensor)
 {
-    return sensor < HAL_SENSOR_COUNT ? sensor_read(sensor) : 0;
+    if (sensor >= HAL_SENSOR_COUNT)
+        return 0;
+    static const uint8_t noise_sd[SIM_SENSOR_COUNT] = {3, 0, 0, 8, 8, 8, 2, 2, 2, 2};
+    double v = inputs.sensor[sensor];
+    if (inputs.noise && noise_sd[sensor])
+        v += gauss() * noise_sd[sensor];
+    int32_t r = trunc_sat(v);
+    if (sensor == HAL_SENSOR_ACCEL_X_MG || sensor == HAL_SENSOR_ACCEL_Y_MG)
+        return clamp_i32(r, -16000, 16000);
+    if (sensor >= HAL_SENSOR_COLOUR_R)
+        return clamp_i32(r, 0, 255);
+    return r;
 }
 
 /* The emulator delivers a message the step after it is sent, without airtime (its IR link is a model of reach and
@@ -147,6 +198,10 @@ uint32_t hal_ir_message_us(uint8_t len)
 
 bool hal_ir_send(const hal_ir_msg_t *m)
 {
+    if (ir_out.count < 0 || ir_out.count >= SIM_IR_OUT_CAPACITY) {
+        ir_out.dropped++;
+        return true; /* sent into the air: nobody hears a message the emulator had no room for */
+    }
     uint32_t lo = 0, hi = 0;
     uint8_t len = m->len > HAL_IR_PAYLOAD_MAX ? HAL_IR_PAYLOAD_MAX : m->len;
     for (uint8_t i = 0; i < len; i++) {
@@ -155,7 +210,13 @@ bool hal_ir_send(const hal_ir_msg_t *m)
         else
             hi |= (uint32_t)m->data[i] << (8 * (i - 4));
     }
-    ir_send(m->sender_id, m->led, m->power, len, (int32_t)lo, (int32_t)hi);
+    sim_ir_msg_t *o = &ir_out.msg[ir_out.count++];
+    o->sender_id = m->sender_id;
+    o->led = m->led;
+    o->power = m->power > 100 ? 100 : m->power;
+    o->len = len;
+    o->payload_lo = (int32_t)lo;
+    o->payload_hi = (int32_t)hi;
     return true;
 }
 
@@ -401,6 +462,16 @@ void sim_ir_rx(int32_t side, int32_t sender_id, int32_t sender_led, int32_t powe
     ir_rx_isr((uint8_t)side, &m);
 }
 
+int32_t sim_inputs(void)
+{
+    return (int32_t)(uintptr_t)&inputs;
+}
+
+int32_t sim_ir_out(void)
+{
+    return (int32_t)(uintptr_t)&ir_out;
+}
+
 int32_t sim_outputs(void)
 {
     return (int32_t)(uintptr_t)&outputs;
@@ -426,6 +497,16 @@ const sim_outputs_t *sim_host_outputs(void)
 const uint8_t *sim_host_tx_buffer(void)
 {
     return tx_out;
+}
+
+sim_inputs_t *sim_host_inputs(void)
+{
+    return &inputs;
+}
+
+sim_ir_out_t *sim_host_ir_out(void)
+{
+    return &ir_out;
 }
 
 sim_event_t *sim_host_events(void)

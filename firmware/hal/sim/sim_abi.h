@@ -1,6 +1,7 @@
 /**
  * \file sim_abi.h
- * The contract between the firmware compiled to WebAssembly (hal/sim) and the JVM emulator.
+ * The contract between the firmware compiled to WebAssembly (hal/sim) and the JVM emulator: exports only, the
+ * emulator hands over sensor readings and takes IR messages as data in linear memory.
  * The emulator mirrors every declaration here (emulator/.../firmware/); change both together.
  *
  * Time: the MCU clock runs at 32 MHz; `ticks` are 32 MHz clock cycles since sim_init, as int64.
@@ -13,7 +14,6 @@
 #include <stdint.h>
 
 #define SIM_EXPORT(name) __attribute__((export_name(#name)))
-#define SIM_IMPORT(name) __attribute__((import_module("env"), import_name(#name)))
 
 /* ---- exports: called by the emulator -------------------------------------------------------- */
 
@@ -93,26 +93,59 @@ typedef struct __attribute__((packed)) {
     uint8_t line_emitters; /**< bitmask of the 5 line sensor emitters currently lit */
 } sim_outputs_t;
 
-/* ---- imports: provided by the emulator (module "env") --------------------------------------- */
+/* ---- sensors and IR as data: the firmware imports nothing ---------------------------------------------- */
 
-/** One sweep of the line sensor ADC: the four detectors (0..3, left to right) read now with the
- *  emitters in `emitters` (bit e = emitter e, 0..4) lit; detector d's 12-bit result (0..4095) is in
- *  bits 16d..16d+15 of the return value (one host call per conversion instead of one per detector).
- *  Detector d sits between emitters d and d+1: spot 2d is lit by emitter d, spot 2d+1 by emitter d+1. */
-SIM_IMPORT(line_adc_sweep) int64_t line_adc_sweep(int32_t emitters);
-
-/** Other sensors, read now, in physical units. */
 enum sim_sensor {
     SIM_SENSOR_BATTERY_MV = 0, SIM_SENSOR_CURRENT_MA = 1, SIM_SENSOR_MCU_TEMP_DC = 2,
     SIM_SENSOR_ACCEL_X_MG = 3, SIM_SENSOR_ACCEL_Y_MG = 4, SIM_SENSOR_ACCEL_Z_MG = 5,
-    SIM_SENSOR_COLOUR_R = 6, SIM_SENSOR_COLOUR_G = 7, SIM_SENSOR_COLOUR_B = 8, SIM_SENSOR_COLOUR_CLEAR = 9
+    SIM_SENSOR_COLOUR_R = 6, SIM_SENSOR_COLOUR_G = 7, SIM_SENSOR_COLOUR_B = 8, SIM_SENSOR_COLOUR_CLEAR = 9,
+    SIM_SENSOR_COUNT = 10
 };
-SIM_IMPORT(sensor_read) int32_t sensor_read(int32_t sensor);
 
-/** The firmware sends an IR message now from LED `led` (0 front, 1 right, 2 rear, 3 left) at `power`
- *  percent; the emulator delivers it (sim_ir_rx) to every receiver in range, the sender's own
- *  receiver included when an obstacle reflects it. */
-SIM_IMPORT(ir_send) void ir_send(int32_t sender_id, int32_t led, int32_t power, int32_t len,
-                                 int32_t payload_lo, int32_t payload_hi);
+/** What the robot's sensors face during a step, little-endian in linear memory at sim_inputs(). The emulator writes
+ *  it before it hands over the step's events (what changes each step) and at boot (what does not); the HAL reads
+ *  it whenever the firmware converts or reads a sensor, and adds the noise itself from `noise_state`, so that a
+ *  sensor read costs no call out of the instance. The HAL's readings, in the emulator's sensor model:
+ *  - line sensor (hal_line_convert, lit emitters in `e`): detector d reads
+ *    trunc(line_ambient_adc + sum over lit e in {d, d+1} of (line_white_adc + line_span_adc * line_dark[2d + e - d])
+ *    + gauss() * line_noise_adc), within 0..4095;
+ *  - sensor s (hal_sensor_read): trunc(sensor[s] + gauss() * sd(s)), sd 3 for the battery, 8 for the
+ *    accelerometer, 2 for colour and none (no draw) for current and temperature; accelerometer x and y within
+ *    -16000..16000, colour within 0..255;
+ *  gauss() only while `noise` is set: the sum of the four 16-bit quarters of the next splitmix64 number (the
+ *  generator of java.util.SplittableRandom: state += 0x9E3779B97F4A7C15, then its mix), less 131070, divided by
+ *  65536 sqrt(1/3). trunc() truncates towards zero, saturating, NaN to 0 (Kotlin's Double.toInt()). */
+typedef struct __attribute__((packed)) {
+    uint64_t noise_state;              /**< the robot's noise generator: the emulator reads it back after the step */
+    int32_t noise;                     /**< non-zero: readings are noisy (each step) */
+    int32_t reserved;
+    double line_ambient_adc;           /**< a detector's reading with its emitters off (at boot) */
+    double line_white_adc;             /**< what a lit emitter adds over white floor (at boot) */
+    double line_span_adc;              /**< and over black tape, less line_white_adc (at boot) */
+    double line_noise_adc;             /**< standard deviation of a detector's noise (at boot) */
+    double line_dark[8];               /**< darkness under spot j, 0 white .. 1 black, left to right (each step) */
+    double sensor[SIM_SENSOR_COUNT];   /**< each sensor's true value in its unit (each step) */
+} sim_inputs_t;
+
+SIM_EXPORT(sim_inputs) int32_t sim_inputs(void);
+
+/** An IR message the firmware sent from LED `led` (0 front, 1 right, 2 rear, 3 left) at `power` percent, `len`
+ *  payload bytes (0..8) little-endian in payload_lo, payload_hi. */
+typedef struct __attribute__((packed)) {
+    int32_t sender_id, led, power, len, payload_lo, payload_hi;
+} sim_ir_msg_t;
+
+#define SIM_IR_OUT_CAPACITY 32
+
+/** The IR messages sent since the emulator last emptied it (setting `count` to 0), at sim_ir_out(); the emulator
+ *  delivers them (sim_ir_rx) at the step's end to every receiver in range, the sender's own receiver included when
+ *  an obstacle reflects it. A message that finds the buffer full is counted in `dropped` and lost. */
+typedef struct __attribute__((packed)) {
+    int32_t count;
+    int32_t dropped;
+    sim_ir_msg_t msg[SIM_IR_OUT_CAPACITY];
+} sim_ir_out_t;
+
+SIM_EXPORT(sim_ir_out) int32_t sim_ir_out(void);
 
 #endif

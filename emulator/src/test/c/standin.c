@@ -7,11 +7,45 @@
 #include <stdint.h>
 
 #define EXPORT(name) __attribute__((export_name(#name)))
-#define IMPORT(name) __attribute__((import_module("env"), import_name(#name)))
 
-IMPORT(line_adc_sweep) int64_t line_adc_sweep(int32_t emitters);
-IMPORT(sensor_read) int32_t sensor_read(int32_t sensor);
-IMPORT(ir_send) void ir_send(int32_t id, int32_t led, int32_t power, int32_t len, int32_t lo, int32_t hi);
+/* sim_inputs_t and sim_ir_out_t of sim_abi.h: the sensors as the emulator writes them, the IR messages sent. */
+typedef struct __attribute__((packed)) {
+    uint64_t noise_state;
+    int32_t noise, reserved;
+    double line_ambient_adc, line_white_adc, line_span_adc, line_noise_adc;
+    double line_dark[8];
+    double sensor[10];
+} inputs_t;
+
+typedef struct __attribute__((packed)) {
+    int32_t count, dropped;
+    struct __attribute__((packed)) { int32_t sender_id, led, power, len, lo, hi; } msg[32];
+} ir_out_t;
+
+static inputs_t inputs;
+static ir_out_t ir_out;
+
+EXPORT(sim_inputs) int32_t sim_inputs(void) { return (int32_t)(uintptr_t)&inputs; }
+EXPORT(sim_ir_out) int32_t sim_ir_out(void) { return (int32_t)(uintptr_t)&ir_out; }
+
+/* Detector d with both its emitters lit, without noise. */
+static int32_t detector(int d) {
+    double v = inputs.line_ambient_adc;
+    for (int k = 0; k < 2; k++)
+        v += inputs.line_white_adc + inputs.line_span_adc * inputs.line_dark[2 * d + k];
+    return (int32_t)v;
+}
+
+static void ir_send(int32_t id, int32_t led, int32_t power, int32_t len, int32_t lo, int32_t hi) {
+    if (ir_out.count >= 32) { ir_out.dropped++; return; }
+    ir_out.msg[ir_out.count].sender_id = id;
+    ir_out.msg[ir_out.count].led = led;
+    ir_out.msg[ir_out.count].power = power;
+    ir_out.msg[ir_out.count].len = len;
+    ir_out.msg[ir_out.count].lo = lo;
+    ir_out.msg[ir_out.count].hi = hi;
+    ir_out.count++;
+}
 
 typedef struct __attribute__((packed)) {
     int16_t pwm_left, pwm_right;
@@ -51,8 +85,8 @@ EXPORT(sim_init) void sim_init(int32_t robot_id) {
 EXPORT(sim_advance) void sim_advance(int64_t now) {
     while (next_tick <= now) {
         for (int d = 0; d < 4; d++)
-            state.adc[d] = (int32_t)(((uint64_t)line_adc_sweep(3 << d) >> (16 * d)) & 0xFFFF);
-        state.battery_mv = sensor_read(0);
+            state.adc[d] = detector(d);
+        state.battery_mv = (int32_t)inputs.sensor[0];
         if (next_tick >= next_beacon) {
             ir_send(state.id, 0, 100, 2, 0x1234, 0);
             next_beacon += 32000 * 40;

@@ -8,13 +8,13 @@ import android.view.MotionEvent
 import android.widget.RadioButton
 import org.junit.Test
 import org.junit.runner.RunWith
-import org.pocketbot.android.model.Screen
 import org.pocketbot.android.model.JoystickModel
+import org.pocketbot.android.model.Screen
 import org.pocketbot.android.ui.JoystickCanvas
 import org.pocketbot.android.ui.palette
-import org.pocketbot.protocol.LineFollowStatus
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.LineCalibration
+import org.pocketbot.sdk.LineFollowStatus
 import org.pocketbot.sdk.Pose
 import org.robolectric.Shadows.shadowOf
 import org.robolectric.annotation.Config

@@ -12,9 +12,9 @@ import org.junit.After
 import org.junit.Test
 import org.junit.runner.RunWith
 import org.pocketbot.emulator.RobotHandle
-import org.pocketbot.protocol.LineFollowStatus
 import org.pocketbot.protocol.LocoMode
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.LineFollowStatus
 import org.robolectric.Robolectric
 import org.robolectric.Shadows.shadowOf
 import org.robolectric.android.controller.ServiceController

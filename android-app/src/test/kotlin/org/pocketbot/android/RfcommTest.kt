@@ -277,7 +277,7 @@ class RfcommTest {
         assertEquals("bluetooth:00:11:22:33:44:55", device.address)
 
         // Connected over the shadow RFCOMM socket: handshake, settings, state, all SLIP on the socket's streams.
-        val connected = device.connect(scope, RobotOptions(settingsCache = InMemorySettingsCache()))
+        val connected = device.connect(scope, RobotOptions { settingsCache = InMemorySettingsCache() })
         assertEquals(AndroidBluetoothTransport.SPP_UUID, BridgedBluetoothDevice.lastUuid)
         assertEquals(robot.name, connected.identity.name)
         withTimeoutOrNull(5.seconds) { connected.power.reading.first { it.batteryMv > 3000 } }

@@ -67,7 +67,7 @@ object Exit {
 
 /** What every command shares: where to look for robots, and how to print. */
 class Globals(val format: Format, val sources: Sources) {
-    val options = RobotOptions(hostLabel = HostLabel.of("cli"))
+    val options = RobotOptions { hostLabel = HostLabel.of("cli") }
 }
 
 /** Another host drives the robot and the command would change it: exit code 8. */
@@ -159,7 +159,7 @@ fun robotCommand(
             val found = if (!all && names.all { deviceAt(it) != null }) emptyList() else globals.sources.scan(enough = { f ->
                 !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
             })
-            robots = connectRobots(found, names, all, globals.options.copy(role = role), progress)
+            robots = connectRobots(found, names, all, RobotOptions(globals.options) { this.role = role }, progress)
             listening = robots.map { r -> launch { r.events.collect { tell(r, it) } } }
             if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
                 throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")

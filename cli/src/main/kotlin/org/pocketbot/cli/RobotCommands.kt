@@ -27,23 +27,22 @@ import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.withTimeoutOrNull
 import kotlinx.coroutines.CancellationException
-import org.pocketbot.protocol.ColourMode
-import org.pocketbot.protocol.LocoMode
-import org.pocketbot.protocol.DebugModule
-import org.pocketbot.protocol.RobotState
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.ColourMode
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.DebugModule
 import org.pocketbot.sdk.DebugSource
+import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementHandle
 import org.pocketbot.sdk.MovementOutcome
 import org.pocketbot.sdk.MovementResult
-import org.pocketbot.sdk.Pose
 import org.pocketbot.sdk.QueueOnLeave
-import org.pocketbot.sdk.Role
-import org.pocketbot.sdk.WheelDistances
 import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotState
+import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.SettingField
+import org.pocketbot.sdk.SyncMode
+import org.pocketbot.sdk.WheelDistances
 import java.io.File
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -464,7 +463,7 @@ class MoveCommand : DrivingCommand("move", 2..3) {
     /** Queues the movement on [r], saying so when that ends the line following or track behaviour the robot ran. */
     private suspend fun start(r: Robot): Started {
         val mode = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }?.locomotion?.mode
-        val started = Started(r, r.locomotion.enqueue(movement), r.odometry.pose.value, r.odometry.wheelDistances.value)
+        val started = Started(r, r.locomotion.enqueue(movement), r.odometry.wheelDistances.value)
         when (mode) {
             LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.identity.name} was following the line: the movement ended that")
             LocoMode.TRACK -> System.err.println("pocketbot: ${r.identity.name} ran the track behaviour: the movement ended that")
@@ -473,15 +472,18 @@ class MoveCommand : DrivingCommand("move", 2..3) {
         return started
     }
 
-    /** A movement the robot took, and where its odometry stood then. */
-    private inner class Started(val robot: Robot, val handle: MovementHandle, val pose: Pose, val wheels: WheelDistances) {
+    /** A movement the robot took, and its wheel distances then. */
+    private inner class Started(val robot: Robot, val handle: MovementHandle, val wheels: WheelDistances) {
         /**
          * How much of it this host saw the robot do, from the odometry since the robot took it: metres for a straight,
          * degrees for a rotation or an arc. For a movement whose end is not known (its robot was lost).
          */
         fun seen(): Double = when (movement) {
             is Movement.Straight -> robot.odometry.wheelDistances.value.let { (it.leftM + it.rightM - wheels.leftM - wheels.rightM) / 2 }
-            else -> Math.toDegrees(robot.odometry.pose.value.headingRad - pose.headingRad)
+            // From the wheels, not the heading: a heading reads -180..180 degrees, a turn may be larger.
+            else -> robot.odometry.wheelDistances.value.let {
+                Math.toDegrees((it.rightM - it.leftM - wheels.rightM + wheels.leftM) / robot.settings.geometry.wheelBaseM.value)
+            }
         }.let { kotlin.math.round(it * 1000) / 1000 }
 
         /** Its row: how it ended, or with [result] null `lost` and what [seen] says. */
@@ -489,7 +491,7 @@ class MoveCommand : DrivingCommand("move", 2..3) {
             "robot" to robot.identity.name, "id" to handle.id, "movement" to movement.toString(),
             "outcome" to (result?.outcome ?: MovementOutcome.LOST),
             // The robot's own figure is a float: as it says it. Without one, what this host saw.
-            "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit,
+            "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit.symbol,
         )
     }
 }

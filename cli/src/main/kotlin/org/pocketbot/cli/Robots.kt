@@ -1,5 +1,6 @@
 package org.pocketbot.cli
 
+import java.util.concurrent.ConcurrentLinkedQueue
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.async
 import kotlinx.coroutines.awaitAll
@@ -16,8 +17,7 @@ import org.pocketbot.sdk.transport.EmulatorDiscoverer
 import org.pocketbot.sdk.transport.MergedDiscoverer
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.SerialDiscoverer
-import org.pocketbot.sdk.transport.SerialRobotDevice
-import org.pocketbot.sdk.transport.TcpRobotDevice
+import org.pocketbot.sdk.transport.RobotAddress
 import java.nio.file.Files
 import java.nio.file.Paths
 import kotlin.time.Duration
@@ -58,57 +58,59 @@ class Sources(private val host: String, private val controlPort: Int, private va
     }
 }
 
-private val TCP_ADDRESS = Regex("""tcp://(\[[0-9A-Fa-f:.]+]|[^:/\[\]]+):(\d{1,5})""")
-
 /**
  * The robot at [address] when it is one a person can type without a scan: `tcp://HOST:PORT` (an emulated robot, a
- * serial-to-TCP bridge) or `serial:PATH`; null for anything else.
+ * serial-to-TCP bridge) or `serial:PATH` (see [RobotAddress]); null for anything else (a name, an id).
+ *
+ * @throws IllegalArgumentException for an address of those kinds that is not right (no port, say): what is wrong.
  */
-fun deviceAt(address: String): RobotDevice? {
-    TCP_ADDRESS.matchEntire(address)?.let { m ->
-        val port = m.groupValues[2].toInt().takeIf { it in 1..65535 } ?: return null
-        return TcpRobotDevice(m.groupValues[1].removePrefix("[").removeSuffix("]"), port)
-    }
-    return address.removePrefix("serial:").takeIf { address.startsWith("serial:") && it.isNotEmpty() }?.let { SerialRobotDevice(it) }
-}
+fun deviceAt(address: String): RobotDevice? = if (RobotAddress.isAddress(address)) RobotAddress.parse(address) else null
 
 /**
  * Finds the robots [names] (each a name, an address, or a numeric id) among [found] and connects them, or every
  * robot found with [all]. A name or address picks its device without connecting the others (an address that can be
  * typed, see [deviceAt], needs no scan); an id needs each candidate's hello, so the candidates are connected and those
- * that are not wanted are closed again.
+ * that are not wanted are closed again. When it fails, it closes what it connected: the robots belong to this scope,
+ * which would wait for them.
  */
 suspend fun CoroutineScope.connectRobots(found: List<Found>, names: List<String>, all: Boolean, options: RobotOptions, progress: Progress): List<Robot> {
-    if (all) {
-        if (found.isEmpty()) throw NoSuchRobotException("no robots found")
-        return connectAll(found.map { it.device }, options, progress)
-    }
-    return names.map { name ->
-        val direct = found.firstOrNull { it.device.name == name || it.device.address == name }?.device ?: deviceAt(name)
-        when {
-            direct != null -> connectAll(listOf(direct), options, progress).single()
-            name.toIntOrNull() != null -> {
-                val robots = connectAll(found.map { it.device }, options, progress)
-                val wanted = robots.firstOrNull { it.identity.robotId == name.toInt() }
-                robots.filter { it !== wanted }.forEach { it.disconnect() }
-                wanted ?: throw NoSuchRobotException("no robot with id $name among ${found.size} found")
-            }
-            else -> throw NoSuchRobotException("no robot '$name' (found: ${found.joinToString { it.device.name }.ifEmpty { "none" }})")
+    val connected = ConcurrentLinkedQueue<Robot>()
+    try {
+        if (all) {
+            if (found.isEmpty()) throw NoSuchRobotException("no robots found")
+            return connectAll(found.map { it.device }, options, progress, connected)
         }
+        return names.map { name ->
+            val direct = found.firstOrNull { it.device.name == name || it.device.address == name }?.device ?: deviceAt(name)
+            when {
+                direct != null -> connectAll(listOf(direct), options, progress, connected).single()
+                name.toIntOrNull() != null -> {
+                    val robots = connectAll(found.map { it.device }, options, progress, connected)
+                    val wanted = robots.firstOrNull { it.identity.robotId == name.toInt() }
+                    robots.filter { it !== wanted }.forEach { it.disconnect() }
+                    wanted ?: throw NoSuchRobotException("no robot with id $name among ${found.size} found")
+                }
+                else -> throw NoSuchRobotException("no robot '$name' (found: ${found.joinToString { it.device.name }.ifEmpty { "none" }})")
+            }
+        }
+    } catch (e: Throwable) {
+        connected.forEach { it.close() }
+        throw e
     }
 }
 
 /**
- * Connects [devices] at once. Each robot belongs to this scope (the command's); a connect that fails ends the others
- * and surfaces as its own exception (inside a child scope, so it does not cancel the command's scope instead).
+ * Connects [devices] at once, adding each to [connected]. Each robot belongs to this scope (the command's); a connect
+ * that fails ends the others and surfaces as its own exception (inside a child scope, so it does not cancel the
+ * command's scope instead).
  */
-private suspend fun CoroutineScope.connectAll(devices: List<RobotDevice>, options: RobotOptions, progress: Progress): List<Robot> {
+private suspend fun CoroutineScope.connectAll(devices: List<RobotDevice>, options: RobotOptions, progress: Progress, connected: MutableCollection<Robot>): List<Robot> {
     val owner = this
     var done = 0
     progress.show("connecting 0/${devices.size}")
     return coroutineScope {
         devices.map { d ->
-            async { d.connect(owner, options).also { progress.show("connecting ${++done}/${devices.size}") } }
+            async { d.connect(owner, options).also { connected += it; progress.show("connecting ${++done}/${devices.size}") } }
         }.awaitAll()
     }.also { progress.clear() }
 }

@@ -1,9 +1,9 @@
 package org.pocketbot.cli
 
-import org.pocketbot.protocol.LineFlags
-import org.pocketbot.protocol.LocoMode
-import org.pocketbot.protocol.RobotState
+import org.pocketbot.sdk.LineFlag
+import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotState
 import org.pocketbot.sdk.StateFields
 import kotlin.math.round
 
@@ -30,7 +30,7 @@ object StateColumns {
         StateColumn("time_s", 8) { _, s -> s.time.timeMs / 1000.0 },
         StateColumn("mode", LocoMode.entries.maxOf { it.name.length }) { _, s -> s.locomotion.mode },
         StateColumn("speed_mps", 6) { _, s -> (s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0 },
-        StateColumn("line", 5) { _, s -> if (s.line.flags and LineFlags.SEEN != 0) s.line.position else "none" },
+        StateColumn("line", 5) { _, s -> if (LineFlag.SEEN in s.line.flags) s.line.position else "none" },
         StateColumn("battery_v", 5) { _, s -> s.power.batteryMv / 1000.0 },
     ) + pose.map { StateColumn(it.name.removePrefix("pose."), it.width, it.of) }
 

@@ -333,7 +333,7 @@ class CliProcessTest {
         // Another host drives the robot meanwhile (the console only watches): the firmware reports the start and the end
         // of its movement in debug text.
         val id = runBlocking {
-            val host = emulator.robot(2).device().connect(this, RobotOptions(hostLabel = "script@test"))
+            val host = emulator.robot(2).device().connect(this, RobotOptions { hostLabel = "script@test" })
             host.locomotion.enqueue(Movement.Straight(0.02, 0.1)).id.also { host.disconnect() }
         }
         console.awaitLine(Regex("^PocketBot-2 .*done $id"))
@@ -344,7 +344,7 @@ class CliProcessTest {
 
     @Test
     fun aCommandThatWatchesLeavesTheDriverAloneAndOneThatChangesTheRobotNeedsTakeOver() = runBlocking {
-        val panel = emulator.robot(1).device().connect(this, RobotOptions(hostLabel = "panel@test"))
+        val panel = emulator.robot(1).device().connect(this, RobotOptions { hostLabel = "panel@test" })
         val events = java.util.concurrent.LinkedBlockingQueue<RobotEvent>()
         val listening = launch(Dispatchers.Default) { panel.events.collect { events.put(it) } }
         try {

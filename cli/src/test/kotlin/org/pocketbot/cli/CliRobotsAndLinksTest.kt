@@ -89,6 +89,16 @@ class CliRobotsAndLinksTest {
     }
 
     @Test
+    fun aWrongAddressIsAUsageErrorThatSaysWhatIsWrong() {
+        val noPort = runPocketBot(listOf("info", "tcp://127.0.0.1"))
+        assertEquals(2, noPort.code, "$noPort")
+        assertTrue(noPort.err.contains("'tcp://127.0.0.1' has no port: write tcp://127.0.0.1:PORT"), "$noPort")
+        val badPort = runPocketBot(listOf("info", "tcp://127.0.0.1:70000"))
+        assertEquals(2, badPort.code, "$badPort")
+        assertTrue(badPort.err.contains("'70000' in 'tcp://127.0.0.1:70000' is not a TCP port (1..65535)"), "$badPort")
+    }
+
+    @Test
     fun aScanWithoutABluetoothAdapterSaysSoWithoutAskingDBus() {
         assumeFalse(File("/sys/class/bluetooth/hci0").exists(), "this machine has a Bluetooth adapter")
         val run = runPocketBot(listOf("--sources", "bluetooth", "--scan-seconds", "30", "scan"))

@@ -109,7 +109,7 @@ fun serveAddress(text: String): InetSocketAddress? {
 suspend fun startFleet(model: PanelModel, speedsMps: List<Double> = listOf(0.15)) {
     val robots = model.connectEmbedded()
     robots.forEachIndexed { i, r ->
-        r.startLineFollowing(speedsMps[i % speedsMps.size], org.pocketbot.protocol.ColourMode.PLAIN)
+        r.startLineFollowing(speedsMps[i % speedsMps.size], org.pocketbot.sdk.ColourMode.PLAIN)
     }
 }
 

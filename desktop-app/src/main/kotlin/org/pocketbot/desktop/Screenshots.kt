@@ -64,7 +64,7 @@ fun Screenshots(window: ComposeWindow, model: PanelModel, view: MutableState<Vie
         shoot(View.COMMANDS, "commands")
         // Another host (as `pocketbot --take-over` does) takes the robot over: the panel watches it and says who drives.
         tuned.movements.first { it.last().result != null }
-        val other = tuned.emulated!!.device().connect(this, RobotOptions(role = Role.TAKE_OVER, hostLabel = "cli@lab-pc"))
+        val other = tuned.emulated!!.device().connect(this, RobotOptions { role = Role.TAKE_OVER; hostLabel = "cli@lab-pc" })
         other.locomotion.enqueue(Movement.Rotate(180.0, 0.1))
         tuned.driving.first { !it.byThisHost }
         shoot(View.COMMANDS, "watching")

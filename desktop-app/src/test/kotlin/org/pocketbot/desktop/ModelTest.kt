@@ -175,7 +175,7 @@ class ModelTest {
         runBlocking {
             val robot = f.panel.connectEmbedded().single()
             robot.robot.odometry.reset(robot.emulated!!.truePose)
-            robot.robot.odometry.trajectory.clear()
+            robot.robot.odometry.clearTrajectory()
             f.emulator.clearPaths()
             robot.robot.locomotion.enqueue(Movement.Straight(0.15, 0.2)).await()
             val end = robot.emulated!!.truePose

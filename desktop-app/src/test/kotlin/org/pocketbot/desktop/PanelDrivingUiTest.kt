@@ -87,7 +87,7 @@ class PanelDrivingUiTest {
             setContent { PanelApp(f.panel) }
             runBlocking { f.panel.connectEmbedded() }
             val phone = runBlocking {
-                f.emulator.handleFor("emulator:1")!!.device().connect(f.scope, RobotOptions(role = Role.TAKE_OVER, hostLabel = "phone@pixel"))
+                f.emulator.handleFor("emulator:1")!!.device().connect(f.scope, RobotOptions { role = Role.TAKE_OVER; hostLabel = "phone@pixel" })
             }
             val phoneHeard = java.util.concurrent.LinkedBlockingQueue<RobotEvent>()
             val listening = f.scope.launchCollect(phone, phoneHeard)

@@ -30,7 +30,7 @@ class PanelFixture(
 ) : AutoCloseable {
     val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
     val emulator = EmulatorModel(scope, world, robots, serveAt = serveAt)
-    val panel = PanelModel(scope, sources, emulator, RobotOptions(settingsCache = InMemorySettingsCache(), hostLabel = HostLabel.of("panel")))
+    val panel = PanelModel(scope, sources, emulator, RobotOptions { settingsCache = InMemorySettingsCache(); hostLabel = HostLabel.of("panel") })
 
     /** The float setting [name] as the emulated robot [id] holds it in its own settings bytes. */
     fun robotFloat(name: String, id: Int = 1): Float {

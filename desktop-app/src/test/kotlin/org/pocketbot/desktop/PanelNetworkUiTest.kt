@@ -60,7 +60,7 @@ class PanelNetworkUiTest {
                 val devices = runBlocking { EmulatorDiscoverer(network, served.controlPort).list() }
                 assertEquals(listOf("PocketBot-1", "PocketBot-2"), devices.map { it.name })
                 val driven = runBlocking {
-                    devices[0].connect(phone, RobotOptions(settingsCache = InMemorySettingsCache(), role = Role.TAKE_OVER, hostLabel = "phone@wifi"))
+                    devices[0].connect(phone, RobotOptions { settingsCache = InMemorySettingsCache(); role = Role.TAKE_OVER; hostLabel = "phone@wifi" })
                 }
                 val sim = panelsOne.emulated!!
                 await("the panel shows who drives robot 1", { panelsOne.driving.value }) {

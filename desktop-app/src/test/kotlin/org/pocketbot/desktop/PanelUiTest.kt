@@ -9,9 +9,9 @@ import androidx.compose.ui.test.performScrollToKey
 import androidx.compose.ui.test.performTextReplacement
 import androidx.compose.ui.test.runComposeUiTest
 import org.pocketbot.desktop.ui.PanelApp
-import org.pocketbot.protocol.LocoMode
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Controller
+import org.pocketbot.sdk.LocoMode
+import org.pocketbot.sdk.SyncMode
 import kotlin.math.abs
 import kotlin.test.Test
 import kotlin.test.assertEquals

@@ -1,5 +1,6 @@
 package org.pocketbot.emulator
 
+import org.pocketbot.emulator.firmware.FirmwareEngine
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.internal.ParallelStepper
 import org.pocketbot.emulator.physics.RobotParams
@@ -11,6 +12,8 @@ import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.world.World
 import org.pocketbot.emulator.world.Worlds
 import org.pocketbot.sdk.transport.Discoverer
+import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.withTimeoutOrNull
 import java.net.InetAddress
 import java.security.MessageDigest
 import java.nio.ByteBuffer
@@ -84,17 +87,29 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
     private val handles = ArrayList<RobotHandle>()
     private val stepper = ParallelStepper(config.threads)
     private val deferred = ArrayList<SimRobot>()
+    /**
+     * The longest block of steps a robot out of everyone's reach runs in a row (see [runLocked]); 1 turns blocks off.
+     * `-Dpocketbot.emulator.blockMs=N` sets it, to measure what blocks buy: the results are the same.
+     */
+    private val blockMs = System.getProperty("pocketbot.emulator.blockMs")?.toIntOrNull()?.coerceIn(1, 50) ?: 8
+    private val alone = ArrayList<SimRobot>()
+    private val together = ArrayList<SimRobot>()
     private var serialNs = 0L
     private val modes = StepModeChooser(config.threads, config.parallelFrom) { (stepper.takeCounts() + " serial part ${serialNs / 1000} us").also { serialNs = 0 } }
     private var nowTicks = 0L
+    private val stepWaiters = ArrayList<CompletableDeferred<Unit>>()
 
     @Volatile private var loop: Thread? = null
     @Volatile private var running = false
     @Volatile private var paused = false
     @Volatile public var speed: Speed = Speed.Realtime(1.0)
     @Volatile private var controlPort: ControlPort? = null
+    private var closed = false // guarded by lock
 
     public val world: World get() = sim.spec
+
+    /** What runs the robots' firmware (see [FirmwareImage.compiled]). */
+    public val firmwareEngine: FirmwareEngine get() = image.engine
 
     /** Simulated time since the start, in 32 MHz ticks. */
     public val timeTicks: Long get() = synchronized(lock) { nowTicks }
@@ -137,7 +152,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         var done = 0L
         while (done < steps) {
             val n = minOf(50L, steps - done).toInt()
-            synchronized(lock) { modes.pace = 0.0; repeat(n) { stepLocked() } }
+            synchronized(lock) { modes.pace = 0.0; runLocked(n) }
             done += n
         }
     }
@@ -152,12 +167,52 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         return condition()
     }
 
-    private fun stepLocked() {
+    /**
+     * Steps [steps] milliseconds, in blocks of up to [blockMs]: a robot that nothing can reach within a block (no
+     * other robot or box within what IR, contact or a push could bridge in that time, whatever every robot does
+     * meanwhile) runs the whole block in a row, exactly as it would in single steps, since nothing of the others
+     * could reach it at a step's end. The rest are stepped a millisecond at a time, with IR and collisions in between.
+     */
+    private fun runLocked(steps: Int) {
+        var left = steps
+        while (left > 0) {
+            val k = minOf(left, blockMs)
+            if (k == 1 || sim.markAlone(k) == 0) repeat(k) { stepLocked() } else stepBlockLocked(k)
+            left -= k
+        }
+    }
+
+    private fun stepBlockLocked(ms: Int) {
         val t0 = nowTicks
-        val t1 = t0 + SimTime.STEP_TICKS
         val rs = sim.robots
         val n = rs.size
+        alone.clear(); together.clear()
+        for (r in rs) if (r.alone) alone += r else together += r
         val parallel = modes.parallel(n)
+        val start = System.nanoTime()
+        if (parallel) stepper.run(alone.size) { i -> runAlone(alone[i], t0, ms) } else for (r in alone) runAlone(r, t0, ms)
+        modes.record(parallel, System.nanoTime() - start, n, ms)
+        // With everyone alone, what happens between robots at a step's end is nothing at all.
+        if (together.isNotEmpty()) repeat(ms) { stepLocked(together) }
+        nowTicks = t0 + ms * SimTime.STEP_TICKS
+    }
+
+    /** [ms] steps of a robot that nothing reaches meanwhile: IR it sends is heard by no one, as at a step's end. */
+    private fun runAlone(r: SimRobot, t0: Long, ms: Int) {
+        r.deferred = false
+        for (k in 0 until ms) {
+            val t = t0 + k * SimTime.STEP_TICKS
+            r.motorUpdate()
+            r.moveAndRun(t, t + SimTime.STEP_TICKS)
+            r.irOutCount = 0
+        }
+    }
+
+    private fun stepLocked(rs: List<SimRobot> = sim.robots) {
+        val t0 = nowTicks
+        val t1 = t0 + SimTime.STEP_TICKS
+        val n = rs.size
+        val parallel = modes.parallel(sim.robots.size)
         val start = System.nanoTime()
         if (parallel) stepper.run(n) { i -> phaseA(rs[i], t0, t1) } else for (i in 0 until n) phaseA(rs[i], t0, t1)
         val phaseEnd = System.nanoTime()
@@ -170,8 +225,26 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         sim.afterStep()
         val end = System.nanoTime()
         serialNs += end - phaseEnd
-        modes.record(parallel, end - start, n)
+        if (rs === sim.robots) modes.record(parallel, end - start, n, 1)
         nowTicks = t1
+        if (stepWaiters.isNotEmpty()) {
+            stepWaiters.forEach { it.complete(Unit) }
+            stepWaiters.clear()
+        }
+    }
+
+    /**
+     * Whether something steps this emulator: its own thread ([start]), or a step within [timeout] (a simulated run,
+     * a test stepping it). A connection to a robot of an emulator that nothing steps would wait for answers that
+     * never come: [org.pocketbot.emulator.transport.InProcessDevice] says so instead.
+     */
+    internal suspend fun isStepped(timeout: Duration): Boolean {
+        if (loop != null) return true
+        val next = CompletableDeferred<Unit>()
+        synchronized(lock) { stepWaiters += next }
+        val stepped = withTimeoutOrNull(timeout) { next.await() } != null
+        if (!stepped) synchronized(lock) { stepWaiters -= next }
+        return stepped || loop != null
     }
 
     private fun phaseA(r: SimRobot, t0: Long, t1: Long) {
@@ -220,13 +293,13 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
             val sp = speed
             if (wasPaused || sp != lastSpeed) { wallStart = clock.nanoTime(); simStart = timeTicks; lastSpeed = sp; wasPaused = false }
             when (sp) {
-                Speed.AsFastAsPossible -> synchronized(lock) { modes.pace = 0.0; repeat(20) { stepLocked() } }
+                Speed.AsFastAsPossible -> synchronized(lock) { if (!closed) { modes.pace = 0.0; runLocked(20) } }
                 is Speed.Realtime -> {
                     val elapsedNs = clock.nanoTime() - wallStart
                     val target = simStart + (elapsedNs * sp.factor * SimTime.TICKS_PER_SECOND / 1e9).toLong()
                     val behind = (target - timeTicks) / SimTime.STEP_TICKS
                     if (behind <= 0) clock.sleep(1)
-                    else synchronized(lock) { modes.pace = sp.factor; repeat(minOf(behind, 200L).toInt()) { stepLocked() } }
+                    else synchronized(lock) { if (!closed) { modes.pace = sp.factor; runLocked(minOf(behind, 200L).toInt()) } }
                 }
             }
         }
@@ -321,7 +394,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         for (r in sim.robots) {
             put(r.x, r.y, r.theta, r.distL, r.distR, r.vl, r.vr)
             val mem = r.firmware.memory
-            md.update(mem.readBytes(0, mem.pages() * 65536))
+            md.update(mem.readBytes(0, mem.size))
             for (l in r.links.all) { buf.clear(); buf.putLong(l.bytesToHost); buf.putLong(l.bytesToHostCrc); md.update(buf.array(), 0, 16) }
         }
         for (b in sim.boxes) put(b.x, b.y)
@@ -332,6 +405,11 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         stop()
         stopTcp()
         for (h in robots) { h.detachH4(); h.sim.links.dropConnections("emulator closed") }
+        // Under the lock: a loop thread that outlived stop()'s wait is between steps when the firmware goes.
+        synchronized(lock) {
+            closed = true
+            for (r in sim.robots) r.firmware.close()
+        }
         stepper.close()
     }
 
@@ -368,10 +446,12 @@ private class StepModeChooser(private val threads: Int, private val parallelFrom
         return current
     }
 
-    fun record(parallel: Boolean, ns: Long, n: Int) {
+    /** [ns] spent stepping [n] robots [ms] milliseconds. */
+    fun record(parallel: Boolean, ns: Long, n: Int, ms: Int) {
         if (threads <= 1 || n < parallelFrom || n != robots || parallel != current) return
         epochNs += ns
-        if (++steps < EPOCH) return
+        steps += ms
+        if (steps < EPOCH) return
         val k = if (current) 1 else 0
         val perStep = epochNs.toDouble() / steps
         avgNs[k] = if (avgNs[k].isNaN()) perStep else avgNs[k] * 0.5 + perStep * 0.5

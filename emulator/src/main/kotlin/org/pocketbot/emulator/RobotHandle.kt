@@ -52,7 +52,10 @@ public class RobotHandle internal constructor(
      */
     public fun reset(): Unit = synchronized(lock) { sim.reset(emulator.timeTicks) }
 
-    /** True pose of the axle midpoint (ground truth, the same frame as the world file's). */
+    /**
+     * True pose of the axle midpoint (ground truth, the same frame as the world file's), its heading in -pi..pi as
+     * the SDK's odometry has it.
+     */
     public val truePose: Pose get() = synchronized(lock) { Pose(sim.x, sim.y, sim.theta) }
 
     /** True travel of both wheels since the robot was added. */
@@ -133,7 +136,7 @@ public class RobotHandle internal constructor(
     public fun openTransport(): Transport = InProcessTransport(sim.links, address)
 
     /** This robot as a discoverable device. */
-    public fun device(): RobotDevice = InProcessDevice(name, address, sim.links)
+    public fun device(): RobotDevice = InProcessDevice(name, address, sim.links, emulator)
 
     private var tcp: TcpEndpoint? = null
 

@@ -1,6 +1,5 @@
 package org.pocketbot.emulator
 
-import org.pocketbot.emulator.firmware.FirmwareHost
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.firmware.FirmwareInstance
 import org.pocketbot.emulator.firmware.SimSensor
@@ -9,7 +8,6 @@ import org.pocketbot.emulator.link.RobotLinks
 import org.pocketbot.emulator.physics.Obb
 import org.pocketbot.emulator.physics.RobotParams
 import org.pocketbot.sdk.Pose
-import java.util.SplittableRandom
 import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.math.cos
@@ -30,7 +28,7 @@ internal class SimRobot(
     start: Pose,
     seed: Long,
     @Volatile var noise: NoiseSettings,
-) : FirmwareHost {
+) {
     // Pose of the axle midpoint; the body is centred on it.
     var x = start.xM
     var y = start.yM
@@ -43,7 +41,8 @@ internal class SimRobot(
     var led = 0
 
     // Streams per robot (by its place in the fleet: ids repeat in fleets over 254), fixed by the seed.
-    private val sensorRng = SplittableRandom(seed * 0x9E3779B97F4A7C15uL.toLong() + index * 0x2545F491L + id)
+    // The sensor stream is the firmware's too: its simulation HAL draws each reading's noise from it (sim_inputs_t).
+    private val sensorRng = SplitMix64(seed * 0x9E3779B97F4A7C15uL.toLong() + index * 0x2545F491L + id)
     private val linkSeed = seed * 31 + index * 0x5DEECE66DL + id * 7919L + 7
 
     private val encPhaseL = sensorRng.nextDouble() * params.stripePairM
@@ -57,12 +56,10 @@ internal class SimRobot(
     private var accelXmg = 0.0
     private var accelYmg = 0.0
 
-    // Line sensor spots, computed at most once per step when the firmware reads them.
+    // Line sensor spots and the colour under the colour sensor, once per step (see sense()).
     private val spotDark = DoubleArray(8)
     private val spotX = DoubleArray(8)
     private val spotY = DoubleArray(8)
-    private var spotsValid = false
-    private var colourValid = false
     private val colourRgb = DoubleArray(3)
 
     // Box contact found at the end of the previous step.
@@ -85,7 +82,7 @@ internal class SimRobot(
     private var txSteps = 0
 
     private val image = image
-    var firmware = FirmwareInstance(image, this); private set
+    var firmware: FirmwareInstance = image.instantiate(); private set
 
     /** The robot's host links, as many as its firmware serves. */
     val links = RobotLinks(firmware.linkCount, linkSeed)
@@ -97,20 +94,28 @@ internal class SimRobot(
     /** Set by the emulator while a step defers this robot to the serial contact phase. */
     var deferred = false
 
+    /** Set by [SimWorld.markAlone] while nothing can reach this robot for a block of steps. */
+    var alone = false
+
     /** Emulator time of sim_init: the firmware counts its ticks from there. */
     var bootTicks = 0L; private set
 
     fun bootAt(now: Long) {
         bootTicks = now
-        firmware.init(id)
-        firmware.advance(0)
+        val fw = firmware
+        fw.setLineSensorModel(world.ambientAdc.toDouble(), params.lineSignalWhiteAdc, params.lineSignalBlackAdc - params.lineSignalWhiteAdc, params.lineNoiseAdc)
+        sense(fw)
+        fw.init(id)
+        fw.advance(0)
+        afterFirmware(fw)
         readOutputs()
     }
 
     /** A power cycle: a fresh firmware instance (nothing of the old RAM survives) with the old one's EEPROM. */
     fun reset(now: Long) {
         val eeprom = firmware.eeprom()
-        firmware = FirmwareInstance(image, this)
+        firmware.close()
+        firmware = image.instantiate()
         if (eeprom != null) firmware.loadEeprom(eeprom)
         irInCount = 0
         // The fresh firmware has only its UART open; a robot's reset drops its other links (as a Bluetooth robot's
@@ -124,7 +129,6 @@ internal class SimRobot(
     fun place(pose: Pose) {
         x = pose.xM; y = pose.yM; theta = pose.headingRad
         vl = 0.0; vr = 0.0; prevV = 0.0; contactBox = -1
-        spotsValid = false; colourValid = false
     }
 
     // ---- phase 1: motors --------------------------------------------------------------------------------------
@@ -179,10 +183,8 @@ internal class SimRobot(
             while (j >= 0 && edgeTimes[j] > t) { edgeTimes[j + 1] = edgeTimes[j]; edgeWheels[j + 1] = edgeWheels[j]; j-- }
             edgeTimes[j + 1] = t; edgeWheels[j + 1] = w
         }
-        spotsValid = false
-        colourValid = false
-
         val fw = firmware
+        sense(fw)
         // IR heard at the end of the previous step.
         if (irInCount > 0) {
             for (k in 0 until irInCount) {
@@ -241,6 +243,7 @@ internal class SimRobot(
             }
             l.deliverToHost(t1)
         }
+        afterFirmware(fw)
 
         updateBattery(dt)
         world.checkContacts(this)
@@ -277,8 +280,8 @@ internal class SimRobot(
     }
 
     private fun readOutputs() {
-        dutyL = (firmware.pwmLeft().coerceIn(-1000, 1000)) / 1000.0
-        dutyR = (firmware.pwmRight().coerceIn(-1000, 1000)) / 1000.0
+        dutyL = clamp(firmware.pwmLeft(), -1000, 1000) / 1000.0
+        dutyR = clamp(firmware.pwmRight(), -1000, 1000) / 1000.0
         led = firmware.led()
     }
 
@@ -299,24 +302,29 @@ internal class SimRobot(
         chargeUsedMah += currentMa * dt / 3600
     }
 
-    // ---- FirmwareHost: the firmware reads its sensors and sends IR --------------------------------------------
+    // ---- what the firmware's sensors face, and the IR it sends ---------------------------------------------------
 
-    override fun lineAdcSweep(emitters: Int): Long {
-        val lit = emitters and 0x1F
-        if (lit != 0 && !spotsValid) computeSpots()
-        val ambient = world.ambientAdc.toDouble()
-        val white = params.lineSignalWhiteAdc
-        val span = params.lineSignalBlackAdc - white
-        val noisy = noise.sensorNoise
-        var sweep = 0L
-        for (d in 0 until 4) {
-            var v = ambient
-            if (lit and (1 shl d) != 0) v += white + span * spotDark[2 * d]
-            if (lit and (1 shl (d + 1)) != 0) v += white + span * spotDark[2 * d + 1]
-            if (noisy) v += gauss() * params.lineNoiseAdc
-            sweep = sweep or (v.toInt().coerceIn(0, 4095).toLong() shl (16 * d))
-        }
-        return sweep
+    /**
+     * Writes what the sensors face now into the firmware's memory (sim_abi.h sim_inputs_t), where its simulation HAL
+     * reads them, adding noise from this robot's sensor stream: once per step instead of a call out of the firmware
+     * per conversion. The robot does not move while its firmware runs, so every reading in the step is as it was.
+     */
+    private fun sense(fw: FirmwareInstance) {
+        computeSpots()
+        for (j in 0 until 8) fw.setLineDark(j, spotDark[j])
+        val a = params.colourSensorAheadM
+        world.surface.colourAt(x + a * cos(theta), y + a * sin(theta), params.colourSpotRadiusM, colourRgb)
+        fw.setSensor(SimSensor.BATTERY_MV, batteryLoadedV() * 1000)
+        fw.setSensor(SimSensor.CURRENT_MA, currentMa)
+        fw.setSensor(SimSensor.MCU_TEMP_DC, 250 + currentMa / 20)
+        fw.setSensor(SimSensor.ACCEL_X_MG, accelXmg)
+        fw.setSensor(SimSensor.ACCEL_Y_MG, accelYmg)
+        fw.setSensor(SimSensor.ACCEL_Z_MG, 1000.0)
+        fw.setSensor(SimSensor.COLOUR_R, colourRgb[0])
+        fw.setSensor(SimSensor.COLOUR_G, colourRgb[1])
+        fw.setSensor(SimSensor.COLOUR_B, colourRgb[2])
+        fw.setSensor(SimSensor.COLOUR_CLEAR, (colourRgb[0] + colourRgb[1] + colourRgb[2]) / 3)
+        fw.setNoise(noise.sensorNoise, sensorRng.state)
     }
 
     private fun computeSpots() {
@@ -328,41 +336,21 @@ internal class SimRobot(
             spotY[j] = y + a * s + lat * c
         }
         world.surface.irDarknessSpots(spotX, spotY, 8, params.lineSpotRadiusM, spotDark)
-        spotsValid = true
     }
 
-    override fun sensorRead(sensor: Int): Int {
-        val n = noise.sensorNoise
-        return when (sensor) {
-            SimSensor.BATTERY_MV -> (batteryLoadedV() * 1000 + if (n) gauss() * 3 else 0.0).toInt()
-            SimSensor.CURRENT_MA -> currentMa.toInt()
-            SimSensor.MCU_TEMP_DC -> (250 + currentMa / 20).toInt()
-            SimSensor.ACCEL_X_MG -> (accelXmg + if (n) gauss() * 8 else 0.0).toInt().coerceIn(-16000, 16000)
-            SimSensor.ACCEL_Y_MG -> (accelYmg + if (n) gauss() * 8 else 0.0).toInt().coerceIn(-16000, 16000)
-            SimSensor.ACCEL_Z_MG -> (1000 + if (n) gauss() * 8 else 0.0).toInt()
-            SimSensor.COLOUR_R, SimSensor.COLOUR_G, SimSensor.COLOUR_B, SimSensor.COLOUR_CLEAR -> {
-                if (!colourValid) {
-                    val a = params.colourSensorAheadM
-                    world.surface.colourAt(x + a * cos(theta), y + a * sin(theta), params.colourSpotRadiusM, colourRgb)
-                    colourValid = true
-                }
-                val v = when (sensor) {
-                    SimSensor.COLOUR_R -> colourRgb[0]
-                    SimSensor.COLOUR_G -> colourRgb[1]
-                    SimSensor.COLOUR_B -> colourRgb[2]
-                    else -> (colourRgb[0] + colourRgb[1] + colourRgb[2]) / 3
-                }
-                (v + if (n) gauss() * 2 else 0.0).toInt().coerceIn(0, 255)
-            }
-            else -> 0
+    /** After the firmware's calls of a step: the noise it drew, and the IR messages it sent (delivered by SimWorld). */
+    private fun afterFirmware(fw: FirmwareInstance) {
+        sensorRng.state = fw.noiseState()
+        val sent = fw.irOutCount()
+        for (m in 0 until sent) {
+            if (irOutCount == IR_CAP) { irDropped++; continue }
+            val k = irOutCount++
+            irOutSender[k] = fw.irOut(m, FirmwareInstance.IR_SENDER); irOutLed[k] = fw.irOut(m, FirmwareInstance.IR_LED)
+            irOutPower[k] = clamp(fw.irOut(m, FirmwareInstance.IR_POWER), 0, 100)
+            irOutLen[k] = clamp(fw.irOut(m, FirmwareInstance.IR_LEN), 0, 8)
+            irOutLo[k] = fw.irOut(m, FirmwareInstance.IR_PAYLOAD_LO); irOutHi[k] = fw.irOut(m, FirmwareInstance.IR_PAYLOAD_HI)
         }
-    }
-
-    override fun irSend(senderId: Int, led: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
-        if (irOutCount == IR_CAP) { irDropped++; return }
-        val k = irOutCount++
-        irOutSender[k] = senderId; irOutLed[k] = led; irOutPower[k] = power.coerceIn(0, 100)
-        irOutLen[k] = len.coerceIn(0, 8); irOutLo[k] = payloadLo; irOutHi[k] = payloadHi
+        irDropped += fw.clearIrOut()
     }
 
     /** Queues an IR reception for the start of the next step (called by SimWorld, serially). */
@@ -374,27 +362,18 @@ internal class SimRobot(
     }
 
     /** Moved by a collision (not by its wheels). */
-    fun shove(dx: Double, dy: Double) { x += dx; y += dy; spotsValid = false; colourValid = false }
+    fun shove(dx: Double, dy: Double) { x += dx; y += dy }
 
     /** The robot's body as an oriented box. */
     fun body(out: Obb) = out.set(x, y, theta, params.lengthM / 2, params.widthM / 2)
 
-    /**
-     * An approximately standard normal sample (sum of four 16-bit uniforms, Irwin-Hall): one call to the
-     * generator, no table to miss in the cache; good to +-3.5 sigma, plenty for sensor noise.
-     */
-    private fun gauss(): Double {
-        val r = sensorRng.nextLong()
-        val sum = (r and 0xFFFF) + ((r ushr 16) and 0xFFFF) + ((r ushr 32) and 0xFFFF) + (r ushr 48)
-        return (sum - 131070.0) * IRWIN_HALL_SCALE
-    }
-
     companion object {
         const val IR_CAP = 32
         const val IDLE_TX_STEPS = 8
-        /** 1 / standard deviation of a sum of four uniforms on 0..65535. */
-        private val IRWIN_HALL_SCALE = 1.0 / (65536.0 * kotlin.math.sqrt(4.0 / 12.0))
         const val G = 9.80665
+
+        /** [v] within [lo]..[hi]: Kotlin's `coerceIn` is not inlined and showed in the profile from these calls. */
+        private fun clamp(v: Int, lo: Int, hi: Int): Int = if (v < lo) lo else if (v > hi) hi else v
 
         fun edgeIndex(u: Double, pair: Double, black: Double): Long {
             val k = floor(u / pair)

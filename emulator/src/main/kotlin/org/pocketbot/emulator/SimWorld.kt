@@ -66,6 +66,11 @@ internal class SimWorld(val spec: World) {
 
     private val contactMargin = 0.0002
 
+    private companion object {
+        /** Added to every reach that [markAlone] works out, against rounding. */
+        const val SAFETY_M = 0.005
+    }
+
     /** After a robot moved: pushes it out of any box it entered and notes the box it is pushing. Robot's own thread. */
     fun checkContacts(r: SimRobot) {
         r.contactBox = -1
@@ -267,6 +272,61 @@ internal class SimWorld(val spec: World) {
     private fun distanceToSegment(px: Double, py: Double, ax: Double, ay: Double, ux: Double, uy: Double, len: Double): Double {
         val t = ((px - ax) * ux + (py - ay) * uy).coerceIn(0.0, len)
         return hypot(ax + ux * t - px, ay + uy * t - py)
+    }
+
+    // ---- robots out of everyone's reach ------------------------------------------------------------------------
+
+    /**
+     * Marks [SimRobot.alone] every robot that no other robot or box can affect, or be affected by, within the next
+     * [ms] steps, whatever the robots do meanwhile; returns how many. Such a robot's IR reaches no receiver and no box
+     * that reflects it, no other body is near enough to occlude IR, collide or push with it, and so what happens
+     * between robots at the end of each of those steps leaves it untouched: it can run them in a row.
+     *
+     * The bounds: a robot's centre moves at most its wheels' top speed (no-load speed at a full battery) per second,
+     * a box at most as fast as the robots pushing it; a robot's LEDs, receivers and body lie within half its diagonal
+     * of its centre; IR carries at most [org.pocketbot.emulator.physics.RobotParams.irRangeM], a box reflects within
+     * half that ([exchangeIr]) and a box touches a robot within [checkContacts]' reach.
+     */
+    fun markAlone(ms: Int): Int {
+        if (robots.isEmpty()) return 0
+        val p = robots[0].params
+        val drift = ms * SimTime.STEP_S * p.noLoadSpeedMps * p.batteryFullV / p.nominalBatteryV
+        val halfDiagonal = hypot(p.lengthM, p.widthM) / 2
+        val robotReach = p.irRangeM + 2 * halfDiagonal + 2 * drift + SAFETY_M
+        val robotReach2 = robotReach * robotReach
+        buildGrid()
+        val span = (robotReach / gridCell).toInt() + 1
+        var count = 0
+        for (i in robots.indices) {
+            val r = robots[i]
+            r.alone = false
+            if (r.contactBox >= 0 || nearBox(r, halfDiagonal, drift)) continue
+            val x = posX[i]; val y = posY[i]
+            var near = false
+            val cx0 = (x / gridCell).toInt().coerceIn(0, gridCols - 1)
+            val cy0 = (y / gridCell).toInt().coerceIn(0, gridRows - 1)
+            scan@ for (gy in max(0, cy0 - span)..min(gridRows - 1, cy0 + span)) for (gx in max(0, cx0 - span)..min(gridCols - 1, cx0 + span)) {
+                var j = cellHead[gy * gridCols + gx]
+                while (j >= 0) {
+                    if (j != i) {
+                        val dx = posX[j] - x; val dy = posY[j] - y
+                        if (dx * dx + dy * dy <= robotReach2) { near = true; break@scan }
+                    }
+                    j = next[j]
+                }
+            }
+            if (!near) { r.alone = true; count++ }
+        }
+        return count
+    }
+
+    private fun nearBox(r: SimRobot, halfDiagonal: Double, drift: Double): Boolean {
+        for (b in boxes) {
+            val reflect = halfDiagonal + r.params.irRangeM / 2 + b.spec.widthM + b.spec.heightM
+            val contact = (r.params.lengthM + max(b.spec.widthM, b.spec.heightM)) * sqrt(2.0)
+            if (hypot(r.x - b.x, r.y - b.y) <= max(reflect, contact) + 2 * drift + SAFETY_M) return true
+        }
+        return false
     }
 
     // ---- robots bumping into robots ----------------------------------------------------------------------------

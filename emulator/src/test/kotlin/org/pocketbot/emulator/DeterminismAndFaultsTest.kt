@@ -1,7 +1,13 @@
 package org.pocketbot.emulator
 
+import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.link.LinkSettings
+import org.pocketbot.emulator.world.Box
+import org.pocketbot.emulator.world.Point
+import org.pocketbot.emulator.world.Tape
+import org.pocketbot.emulator.world.TapeColour
+import org.pocketbot.emulator.world.World
 import org.pocketbot.protocol.Ack
 import org.pocketbot.protocol.LineFollow
 import org.pocketbot.protocol.SetSync
@@ -31,10 +37,11 @@ class DeterminismAndFaultsTest {
     }
 
     @Test
-    fun `a fleet stepped on one thread or on several gives the same state hash`() {
-        fun hash(threads: Int) = Emulator(
+    fun `a fleet gives the same state hash on one thread or two, its firmware run natively or by Chicory`() {
+        // 24 robots on the round track, close enough to hear each other's IR and to collide.
+        fun hash(image: FirmwareImage, threads: Int) = Emulator(
             org.pocketbot.emulator.world.Worlds.load("round"),
-            EmulatorConfig(seed = 11, firmware = RealFirmware.image, threads = threads, parallelFrom = 1),
+            EmulatorConfig(seed = 11, firmware = image, threads = threads, parallelFrom = 1),
         ).use { emu ->
             val hosts = List(24) { k ->
                 val a = Math.toRadians(k * 15.0)
@@ -45,7 +52,40 @@ class DeterminismAndFaultsTest {
             hosts.forEach { it.close() }
             emu.stateHash()
         }
-        assertEquals(hash(1), hash(2))
+        val native = hash(RealFirmware.native, 1)
+        assertEquals(native, hash(RealFirmware.native, 2), "native, two threads against one")
+        assertEquals(native, hash(RealFirmware.chicory, 1), "Chicory against native, one thread")
+        assertEquals(native, hash(RealFirmware.chicory, 2), "Chicory against native, two threads")
+    }
+
+    @Test
+    fun `robots out of everyone's reach stepped in blocks end exactly as in single steps`() {
+        // A line with a box across it that a robot drives up to, and a round track beside it with three robots far
+        // apart and a fourth 10 cm behind one of them (within IR range): some robots are alone (they run blocks of
+        // steps in a row), two are not, and the first stops being alone as it nears the box.
+        val world = World(
+            name = "blocks", widthM = 2.2, heightM = 0.8,
+            tapes = listOf(
+                Tape.Polyline(listOf(Point(0.05, 0.2), Point(0.95, 0.2)), widthM = 0.008, colour = TapeColour.BLACK),
+                Tape.Arc(Point(1.6, 0.4), radiusM = 0.3, startDeg = 0.0, sweepDeg = 360.0, widthM = 0.008, colour = TapeColour.BLACK),
+            ),
+            boxes = listOf(Box(Point(0.5, 0.2), widthM = 0.04, heightM = 0.09)),
+        )
+        val poses = listOf(
+            Pose.ofDegrees(0.2, 0.2, 0.0),
+            Pose.ofDegrees(1.6, 0.1, 0.0), Pose.ofDegrees(1.85981, 0.55, 120.0), Pose.ofDegrees(1.34019, 0.55, 240.0),
+            Pose.ofDegrees(1.5018, 0.1165, -19.1),
+        )
+        fun hash(blocks: Boolean) = Emulator(world, EmulatorConfig(seed = 3, firmware = RealFirmware.image, threads = 2, parallelFrom = 1)).use { emu ->
+            val hosts = poses.map { TestHost(emu.addRobot(pose = it)) }
+            hosts.forEach { it.send(LineFollow(1, 0, 0f)) }
+            val alone = emu.sim.markAlone(8)
+            assertEquals(3, alone, "robots alone at the start")
+            if (blocks) emu.runFor(2.seconds) else emu.step(2000)
+            hosts.forEach { it.close() }
+            emu.stateHash()
+        }
+        assertEquals(hash(blocks = false), hash(blocks = true))
     }
 
     @Test

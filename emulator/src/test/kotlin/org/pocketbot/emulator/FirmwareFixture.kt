@@ -1,18 +1,26 @@
 package org.pocketbot.emulator
 
+import org.pocketbot.emulator.firmware.FirmwareEngine
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.world.Worlds
 import kotlin.math.PI
 import kotlin.math.atan2
 import kotlin.math.hypot
 
-/** The real firmware (firmware/build/wasm/pocketbot.wasm, compiled to bytecode at build time), shared by tests. */
+/**
+ * The real firmware (firmware/build/wasm/pocketbot.wasm, compiled to bytecode at build time, and natively by
+ * `make -C firmware native-engine`), shared by tests: [image] as users get it (native where it runs), or either engine.
+ */
 object RealFirmware {
-    val image: FirmwareImage by lazy {
+    val image: FirmwareImage by lazy { compiled(null) }
+    val native: FirmwareImage by lazy { compiled(FirmwareEngine.NATIVE) }
+    val chicory: FirmwareImage by lazy { compiled(FirmwareEngine.CHICORY) }
+
+    private fun compiled(engine: FirmwareEngine?): FirmwareImage {
         check(FirmwareImage.compiledAvailable()) {
-            "the emulator tests run the real firmware: run `make -C firmware wasm`, then rebuild the emulator"
+            "the emulator tests run the real firmware: run `make -C firmware wasm native-engine`, then rebuild the emulator"
         }
-        FirmwareImage.compiled()
+        return FirmwareImage.compiled(engine)
     }
 
     fun emulator(world: String, seed: Long = 1): Emulator =

@@ -21,7 +21,7 @@ import kotlin.time.Duration.Companion.seconds
 
 /**
  * The emulator's wiring, checked with a tiny stand-in firmware (src/test/c/standin.c, run by Chicory's
- * interpreter) so it does not depend on the real firmware: imports, exports, encoder edges, IR, the link.
+ * interpreter) so it does not depend on the real firmware: exports, the sensors' inputs, encoder edges, IR, the link.
  */
 class StandInWiringTest {
     private val standIn = FirmwareImage.interpreted(

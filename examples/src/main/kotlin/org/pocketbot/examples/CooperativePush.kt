@@ -9,13 +9,13 @@ import kotlinx.coroutines.launch
 import kotlinx.coroutines.selects.select
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.runSimulated
-import org.pocketbot.protocol.DistanceClass
-import org.pocketbot.protocol.ProximitySide
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.DistanceClass
 import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
 import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotState
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.hearsRobot
 import org.pocketbot.sdk.seesObstacle
 import org.pocketbot.sdk.transport.Discoverer
@@ -94,13 +94,13 @@ suspend fun cooperativePush(
     watchers.forEach { it.cancel() }
     first.locomotion.stop(immediate = true)
     val second = robots.single { it !== first }
-    log("${first.name} sees the box and waits for help")
+    log("${first.identity.name} sees the box and waits for help")
     // The second stops when it hears the first close ahead (or sees the box itself).
     second.state.first { s ->
         s.proximity.front.seesObstacle || s.proximity.front.isClose(first)
     }
     second.locomotion.stop(immediate = true)
-    log("${second.name} stops behind it")
+    log("${second.identity.name} stops behind it")
     settle(first, second)
     // Both stand on the line and point along it: odometry heading 0 is the line's direction from here on, so that
     // turns on the spot can be squared up with it.
@@ -119,7 +119,7 @@ suspend fun cooperativePush(
     val pushes = fleet.enqueueTogether(mapOf(first to Movement.Straight(PUSH_M, PUSH_MPS), second to Movement.Straight(PUSH_M, PUSH_MPS)))
     val starts = HashMap<Int, Long>()
     val watch = pushes.map { (robot, handle) ->
-        launch { robot.state.first { it.locomotion.currentId == handle.id }.also { starts[robot.id] = it.time.timeMs } }
+        launch { robot.state.first { it.locomotion.currentId == handle.id }.also { starts[robot.identity.robotId] = it.time.timeMs } }
     }
     // The push ends when the first of the two ends: alone, the other could not move the box and would stall.
     val ends = pushes.values.map { h -> async { h.await() } }
@@ -141,19 +141,17 @@ suspend fun cooperativePush(
     sidestep(first, SIDE_M, left = false)
     first.lineFollower.start(FOLLOW_MPS)
     sidestep(second, SIDE_M, left = true)
-    log("back on the line: ${first.name} leads, ${second.name} keeps its distance")
+    log("back on the line: ${first.identity.name} leads, ${second.identity.name} keeps its distance")
     val keeper = launch { keepDistance(second, ahead = first) }
     delay(followAfter)
     keeper.cancel()
     fleet.stopAll(immediate = true)
-    PushReport(first.id, second.id, pushes.entries.associate { (r, h) -> r.id to h.id }, starts, clearedAt)
+    PushReport(first.identity.robotId, second.identity.robotId, pushes.entries.associate { (r, h) -> r.identity.robotId to h.id }, starts, clearedAt)
 }
 
-private val Robot.id: Int get() = identity.robotId
-
 /** Whether this receiver hears [other] close by: at the mid distance class or nearer. */
-private fun ProximitySide.isClose(other: Robot): Boolean = hearsRobot && robotId == other.id && distance.code >= DistanceClass.MID.code
-private val Robot.name: String get() = identity.name
+private fun RobotState.ProximitySide.isClose(other: Robot): Boolean =
+    hearsRobot && robotId == other.identity.robotId && distance >= DistanceClass.MID
 
 /** Waits until the robots' wheels stand still, in a state the odometry has seen. */
 private suspend fun settle(vararg robots: Robot) {
@@ -168,9 +166,8 @@ private suspend fun settle(vararg robots: Robot) {
  */
 private suspend fun sidestep(robot: Robot, distanceM: Double, left: Boolean) {
     robot.locomotion.enqueue(Movement.Rotate(if (left) 90.0 else -90.0, TURN_MPS)).await()
-    robot.locomotion.enqueue(Movement.Straight(distanceM, TURN_MPS)).await()
-    val at = robot.state.value.time.timeMs
-    robot.state.first { it.time.timeMs > at } // the odometry of a state after the movements
+    robot.locomotion.enqueue(Movement.Straight(distanceM, TURN_MPS))
+    robot.locomotion.awaitSettled() // the odometry of a state after the movements
     robot.locomotion.enqueue(Movement.Rotate(-robot.odometry.pose.value.headingDeg, TURN_MPS)).await()
 }
 

@@ -5,7 +5,7 @@ import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.Speed
-import org.pocketbot.protocol.DistanceClass
+import org.pocketbot.sdk.DistanceClass
 import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.hearsRobot

@@ -33,11 +33,8 @@ fun main(): Unit = Emulator.local(robots = 1).use { emulator ->
                 robot.locomotion.enqueue(Movement.Straight(distanceM = 0.10, speedMps = 0.2))
                 robot.locomotion.enqueue(Movement.Rotate(angleDeg = 90.0, speedMps = 0.2))
             }
-            robot.locomotion.awaitIdle()
-
-            // Let the last state packet after the stop arrive.
-            val finished = robot.state.value.time.timeMs
-            robot.state.first { it.time.timeMs >= finished + 2 * robot.reflector.period.value.inWholeMilliseconds }
+            // Until the last movement ended and the robot reported where it stopped.
+            robot.locomotion.awaitSettled()
             printer.cancel()
 
             val odometry = robot.odometry.pose.value

@@ -8,10 +8,10 @@ import kotlinx.coroutines.flow.asStateFlow
 import kotlinx.coroutines.flow.combine
 import kotlinx.coroutines.flow.stateIn
 import kotlinx.coroutines.flow.update
-import org.pocketbot.protocol.Colour
-import org.pocketbot.protocol.ColourMode
-import org.pocketbot.protocol.LineFollowStatus
+import org.pocketbot.sdk.Colour
+import org.pocketbot.sdk.ColourMode
 import org.pocketbot.sdk.DoubleSetting
+import org.pocketbot.sdk.LineFollowStatus
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.SettingRefusedException
 

@@ -5,10 +5,10 @@ import kotlinx.coroutines.flow.SharingStarted
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.combine
 import kotlinx.coroutines.flow.stateIn
-import org.pocketbot.protocol.LineFlags
-import org.pocketbot.protocol.StateLine
 import org.pocketbot.sdk.LineCalibration
+import org.pocketbot.sdk.LineFlag
 import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotState
 
 /** What the line sensor screen shows: each spot's reading and darkness, where the line is, whether it is seen. */
 class LineSensorReading(
@@ -30,12 +30,12 @@ class LineSensorModel(robot: Robot, scope: CoroutineScope) {
         readingOf(line, LineCalibration.of(robot), robot.settings.lineSensor.threshold.value)
     }.stateIn(scope, SharingStarted.Eagerly, readingOf(robot.lineSensor.reading.value, LineCalibration.of(robot), robot.settings.lineSensor.threshold.value))
 
-    private fun readingOf(line: StateLine, calibration: LineCalibration, threshold: Int) = LineSensorReading(
+    private fun readingOf(line: RobotState.Line, calibration: LineCalibration, threshold: Int) = LineSensorReading(
         raw = line.raw,
         darkness = line.raw.mapIndexed { i, raw -> calibration.darknessPermille(i, raw) },
         position = line.position,
-        seen = line.flags and LineFlags.SEEN != 0,
-        lost = line.flags and LineFlags.LOST != 0,
+        seen = LineFlag.SEEN in line.flags,
+        lost = LineFlag.LOST in line.flags,
         threshold = threshold,
     )
 }

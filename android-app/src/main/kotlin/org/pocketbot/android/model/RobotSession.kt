@@ -14,10 +14,10 @@ import kotlinx.coroutines.flow.combine
 import kotlinx.coroutines.flow.stateIn
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.plus
-import org.pocketbot.protocol.LocoMode
-import org.pocketbot.protocol.StatePower
 import org.pocketbot.sdk.ConnectionState
+import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.Robot
+import org.pocketbot.sdk.RobotState
 
 /** What the status bar shows of the connected robot, always: battery and link. */
 class RobotStatus(
@@ -89,7 +89,7 @@ class RobotSession(
     /** The kind of link, where the transport says (Bluetooth: secure or insecure RFCOMM). */
     val linkKind: StateFlow<LinkKind?> = (robot.device as? DescribedLink)?.linkKind ?: MutableStateFlow(null)
 
-    val status: StateFlow<RobotStatus> = combine(robot.power.reading, robot.connection) { power: StatePower, link ->
+    val status: StateFlow<RobotStatus> = combine(robot.power.reading, robot.connection) { power: RobotState.Power, link ->
         RobotStatus(name, power.batteryMv / 1000.0, link)
     }.stateIn(scope, SharingStarted.Eagerly, RobotStatus(name, 0.0, robot.connection.value))
 

@@ -21,13 +21,13 @@ import org.pocketbot.android.model.AppModel
 import org.pocketbot.android.model.BluetoothStatus
 import org.pocketbot.android.model.CalibrationStep
 import org.pocketbot.android.model.JoystickModel
-import org.pocketbot.android.model.Step
 import org.pocketbot.android.model.RobotSession
 import org.pocketbot.android.model.SpeedSetting
-import org.pocketbot.protocol.Colour
-import org.pocketbot.protocol.ColourMode
-import org.pocketbot.protocol.LineFollowStatus
+import org.pocketbot.android.model.Step
+import org.pocketbot.sdk.Colour
+import org.pocketbot.sdk.ColourMode
 import org.pocketbot.sdk.LineCalibration
+import org.pocketbot.sdk.LineFollowStatus
 
 /** What the robot list asks the Activity to do about Bluetooth: the permission dialog, the switch, the settings. */
 interface BluetoothActions {

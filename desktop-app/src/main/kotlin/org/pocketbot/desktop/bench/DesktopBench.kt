@@ -21,9 +21,9 @@ import org.pocketbot.desktop.model.EmulatorModel
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.ui.PanelApp
 import org.pocketbot.desktop.ui.View
-import org.pocketbot.protocol.ColourMode
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.ColourMode
 import org.pocketbot.sdk.Controller
+import org.pocketbot.sdk.SyncMode
 import java.lang.management.ManagementFactory
 import kotlin.time.Duration.Companion.milliseconds
 import kotlin.time.Duration.Companion.seconds

@@ -64,7 +64,7 @@ class PanelModel(
     private val sources: Map<String, Discoverer>,
     /** The embedded emulator, or null when the panel runs without one. */
     val emulator: EmulatorModel?,
-    private val options: RobotOptions = RobotOptions(hostLabel = HostLabel.of("panel")),
+    private val options: RobotOptions = RobotOptions { hostLabel = HostLabel.of("panel") },
 ) : AutoCloseable {
     private val _found = MutableStateFlow<List<FoundDevice>>(emptyList())
     private val _robots = MutableStateFlow<List<RobotModel>>(emptyList())

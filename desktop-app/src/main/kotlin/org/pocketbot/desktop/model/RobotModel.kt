@@ -11,7 +11,7 @@ import kotlinx.coroutines.flow.update
 import kotlinx.coroutines.isActive
 import kotlinx.coroutines.launch
 import org.pocketbot.emulator.RobotHandle
-import org.pocketbot.protocol.ColourMode
+import org.pocketbot.sdk.ColourMode
 import org.pocketbot.sdk.CommandTimeoutException
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugMessage

@@ -54,8 +54,8 @@ import org.pocketbot.desktop.model.MovementKind
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.RobotModel
 import kotlinx.coroutines.flow.update
-import org.pocketbot.protocol.ColourMode
-import org.pocketbot.protocol.LocoMode
+import org.pocketbot.sdk.ColourMode
+import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.Movement
 import kotlin.math.hypot
 import kotlin.math.min

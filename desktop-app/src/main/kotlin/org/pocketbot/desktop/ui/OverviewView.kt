@@ -28,7 +28,7 @@ import androidx.compose.ui.text.style.TextOverflow
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.PanelModel
 import org.pocketbot.desktop.model.RobotModel
-import org.pocketbot.protocol.LineFlags
+import org.pocketbot.sdk.LineFlag
 import org.pocketbot.sdk.StateFreshness
 
 private val columns = listOf("robot" to 160, "battery" to 80, "mode" to 110, "speed" to 110, "line" to 130, "track" to 190, "link" to 280)
@@ -82,7 +82,7 @@ private fun StateCells(robot: RobotModel, freshness: StateFreshness) {
     StateCell(robot, "battery", decimals(s.power.batteryMv / 1000.0, 2) + " V", full)
     StateCell(robot, "mode", s.locomotion.mode.name.lowercase(), full)
     StateCell(robot, "speed", decimals((s.wheels.speedLeftMmps + s.wheels.speedRightMmps) / 2000.0, 2) + " m/s", reduced)
-    StateCell(robot, "line", if (line.flags and LineFlags.SEEN != 0) "${line.position} ‰" else "no line", reduced)
+    StateCell(robot, "line", if (LineFlag.SEEN in line.flags) "${line.position} ‰" else "no line", reduced)
 }
 
 @Composable

@@ -31,10 +31,9 @@ import androidx.compose.ui.semantics.semantics
 import androidx.compose.ui.text.font.FontStyle
 import androidx.compose.ui.unit.dp
 import org.pocketbot.desktop.model.RobotModel
-import org.pocketbot.protocol.Colour
-import org.pocketbot.protocol.LineFlags
-import org.pocketbot.protocol.ProximitySide
-import org.pocketbot.protocol.StateLine
+import org.pocketbot.sdk.Colour
+import org.pocketbot.sdk.LineFlag
+import org.pocketbot.sdk.RobotState
 import org.pocketbot.sdk.hearsRobot
 import org.pocketbot.sdk.seesObstacle
 
@@ -115,9 +114,9 @@ fun SensorsView(robot: RobotModel) {
  * from the last full state (reduced states carry only the position), drawn greyed; [positionStale] likewise.
  */
 @Composable
-fun LineBars(line: StateLine, modifier: Modifier = Modifier, rawStale: Boolean = false, positionStale: Boolean = false) {
-    val seen = line.flags and LineFlags.SEEN != 0
-    val lost = line.flags and LineFlags.LOST != 0
+fun LineBars(line: RobotState.Line, modifier: Modifier = Modifier, rawStale: Boolean = false, positionStale: Boolean = false) {
+    val seen = LineFlag.SEEN in line.flags
+    val lost = LineFlag.LOST in line.flags
     val bar = if (rawStale) Color.LightGray else MaterialTheme.colorScheme.primary
     Column(modifier) {
         Canvas(Modifier.fillMaxWidth().height(120.dp).semantics { contentDescription = "line spots ${line.raw.joinToString(",")}" }
@@ -142,7 +141,7 @@ fun LineBars(line: StateLine, modifier: Modifier = Modifier, rawStale: Boolean =
     }
 }
 
-fun describe(side: ProximitySide): String {
+fun describe(side: RobotState.ProximitySide): String {
     val parts = mutableListOf<String>()
     if (side.hearsRobot) parts += "robot ${side.robotId}, its ${side.robotLed.name.lowercase()} LED, ${side.distance.name.lowercase()}"
     if (side.seesObstacle) parts += "obstacle"

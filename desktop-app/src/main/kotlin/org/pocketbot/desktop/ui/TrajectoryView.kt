@@ -43,7 +43,7 @@ fun TrajectoryView(model: PanelModel) {
             Text("Trajectories", style = MaterialTheme.typography.titleLarge, modifier = Modifier.weight(1f))
             Text(robots.zip(odometry).joinToString(" · ") { (r, points) -> "${r.name} %.2f m".format(lengthOf(points)) },
                 Modifier.testTag("trajectory-lengths"), style = MaterialTheme.typography.bodySmall)
-            OutlinedButton(onClick = { robots.forEach { it.robot.odometry.trajectory.clear() }; model.emulator?.clearPaths() },
+            OutlinedButton(onClick = { robots.forEach { it.robot.odometry.clearTrajectory() }; model.emulator?.clearPaths() },
                 Modifier.testTag("trajectory-clear")) { Text("Clear") }
             OutlinedButton(onClick = {
                 val r = selected ?: return@OutlinedButton

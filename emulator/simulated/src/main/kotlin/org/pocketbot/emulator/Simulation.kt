@@ -1,5 +1,6 @@
 package org.pocketbot.emulator
 
+import kotlinx.coroutines.CompletableDeferred
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.ExperimentalCoroutinesApi
 import kotlinx.coroutines.Job
@@ -33,6 +34,9 @@ import kotlin.time.Duration.Companion.milliseconds
  * }
  * ```
  *
+ * Robots and fleets connected in the block's scope belong to it; those still open when [block] returns are closed
+ * with the run.
+ *
  * @param limit simulated time after which the run is abandoned with an [IllegalStateException] (a script that waits
  *   for something that never happens would otherwise simulate forever).
  */
@@ -47,13 +51,15 @@ public fun <T> Emulator.runSimulated(
     val dispatcher = StandardTestDispatcher(scheduler, "simulation")
     val job = Job()
     val scope = CoroutineScope(dispatcher + job + RobotRuntime(dispatcher, Random(seed)))
-    val result = scope.async { block() }
+    // The block's value, once it returned: robots and fleets it left open keep its coroutine from completing.
+    val returned = CompletableDeferred<T>()
+    val result = scope.async { block().also { returned.complete(it) } }
     val step = SimTime.toDuration(SimTime.STEP_TICKS)
     var simulated = Duration.ZERO
     try {
         while (true) {
             scheduler.runCurrent()
-            if (result.isCompleted) break
+            if (returned.isCompleted || result.isCompleted) break
             check(simulated < limit) { "simulated run did not finish within $limit of simulated time" }
             step()
             scheduler.advanceTimeBy(step)
@@ -67,7 +73,7 @@ public fun <T> Emulator.runSimulated(
             scheduler.runCurrent()
         }
     }
-    return result.getCompleted()
+    return if (returned.isCompleted) returned.getCompleted() else result.getCompleted()
 }
 
 private const val DRAIN_ROUNDS = 10

@@ -2,6 +2,8 @@ package org.pocketbot.emulator.bench
 
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.EmulatorConfig
+import org.pocketbot.emulator.firmware.FirmwareEngine
+import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.sdk.Pose
 import org.pocketbot.emulator.world.Point
 import org.pocketbot.emulator.world.Tape
@@ -18,44 +20,103 @@ import kotlin.math.abs
 import kotlin.math.ceil
 import kotlin.math.hypot
 import kotlin.math.sqrt
+import kotlin.system.exitProcess
 import kotlin.time.Duration.Companion.seconds
 
 /**
  * `make bench-emulator`: how fast the emulator runs fleets of line-following robots on the round track.
- * Prints per fleet size `emulator robots=<N> realtime_factor=<X>`, `emulator robots=<N> cpu_us_per_robot_ms=<X>`
- * (CPU of the whole process per robot and simulated millisecond: the cost curve over N) and
- * `emulator robots=<N> heap_bytes_per_robot=<X>` (live heap after a GC, less the empty emulator's) on stdout.
+ * Prints per fleet size and firmware engine `emulator robots=<N> realtime_factor=<X> native_ratio=<Y> engine=<E>`,
+ * `emulator robots=<N> cpu_us_per_robot_ms=<X> engine=<E>` (CPU of the whole process per robot and simulated
+ * millisecond: the cost curve over N) and `emulator robots=<N> heap_bytes_per_robot=<X> engine=<E>` (live heap after a
+ * GC, less the empty emulator's) on stdout, and `native robots=<N> cpu_us_per_robot_ms=<X>` for the native fleet.
  * On stderr per fleet: the realtime factor of each simulated second (lowest, median, highest: how much the machine
  * varied during the run), and two hashes of the end state: `state_hash` of everything simulated, firmware memory
  * included, and `pose_hash` of the robots' true poses alone, which stays the same for a firmware build that differs
- * only in its code or memory layout (another compiler flag) and behaves the same.
+ * only in its code or memory layout (another compiler flag) and behaves the same. Both engines give the same hashes:
+ * the bench says so and exits with status 1 when they do not.
  * The fleet shares a floor of round tracks (thesis A.3) laid side by side, three robots per track.
- * Args: fleet sizes (default 1 10 100 1000).
+ * Args: fleet sizes (default 1 3 10 30 100 300 1000). `-Dpocketbot.bench.engines=native,chicory` picks the engines
+ * (default: both when the native one runs here), which run in turn for each fleet, between the native fleet's runs.
  *
  * Internal: a program of this repository (`make bench-emulator`), not part of the library's API.
  */
 internal fun main(args: Array<String>) {
     val sizes = args.mapNotNull { it.toIntOrNull() }.ifEmpty { listOf(1, 3, 10, 30, 100, 300, 1000) }
-    // Warm-up: let the JIT compile the firmware and the emulator before anything is measured.
-    run(10, measureS = 40, warmS = 1)
-    run(100, measureS = 2, warmS = 1)
+    val images = engines().map { FirmwareImage.compiled(it) }
+    // Warm-up: let the JIT compile the firmware (under Chicory) and the emulator before anything is measured.
+    for (image in images) {
+        run(image, 10, measureS = 40, warmS = 1)
+        run(image, 100, measureS = 2, warmS = 1)
+    }
+    val native = System.getProperty("pocketbot.bench.native")?.let { NativeFleet(java.io.File(it)) }
+    var disagreements = 0
     for (n in sizes) {
-        val result = run(n)
-        println("emulator robots=$n realtime_factor=${"%.2f".format(result.factor)}")
-        println("emulator robots=$n cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)}")
-        println("emulator robots=$n heap_bytes_per_robot=${result.heapBytesPerRobot}")
+        // The native fleet runs just before and just after the emulator, so the machine's drift falls on both sides.
+        val nativeBefore = native?.run(n)
+        val results = images.map { it.engine to run(it, n) }
+        val nativeUs = nativeBefore?.let { (it + native.run(n)) / 2 }
+        for ((engine, result) in results) {
+            val e = " engine=${engine.name.lowercase()}"
+            val ratio = nativeUs?.let { " native_ratio=${"%.2f".format(result.cpuUsPerRobotMs / it)}" } ?: ""
+            println("emulator robots=$n realtime_factor=${"%.2f".format(result.factor)}$ratio$e")
+            println("emulator robots=$n cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)}$e")
+            println("emulator robots=$n heap_bytes_per_robot=${result.heapBytesPerRobot}$e")
+        }
+        if (nativeUs != null) println("native robots=$n cpu_us_per_robot_ms=${"%.2f".format(nativeUs)}")
         System.out.flush()
-        val perSecond = result.secondFactors.sorted()
-        System.err.println(
-            "  robots=$n simulated=${result.simulatedS}s wall=${"%.2f".format(result.wallS)}s " +
-                "on_line=${result.onLine}/$n threads=${result.threads} " +
-                "cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)} loadavg=${loadAverage()}\n" +
-                "    realtime_factor per simulated second: lowest ${"%.2f".format(perSecond.first())} " +
-                "median ${"%.2f".format(perSecond[perSecond.size / 2])} highest ${"%.2f".format(perSecond.last())}; " +
-                "state_hash=${result.stateHash} pose_hash=${result.poseHash}",
-        )
+        for ((engine, result) in results) {
+            val perSecond = result.secondFactors.sorted()
+            System.err.println(
+                "  robots=$n engine=${engine.name.lowercase()} simulated=${result.simulatedS}s wall=${"%.2f".format(result.wallS)}s " +
+                    "on_line=${result.onLine}/$n threads=${result.threads} " +
+                    "cpu_us_per_robot_ms=${"%.2f".format(result.cpuUsPerRobotMs)} loadavg=${loadAverage()}\n" +
+                    "    realtime_factor per simulated second: lowest ${"%.2f".format(perSecond.first())} " +
+                    "median ${"%.2f".format(perSecond[perSecond.size / 2])} highest ${"%.2f".format(perSecond.last())}; " +
+                    "state_hash=${result.stateHash} pose_hash=${result.poseHash}",
+            )
+        }
+        // The engines must agree bit for bit (DeterminismAndFaultsTest holds them to it too): a benchmark whose
+        // engines diverge measures two different simulations.
+        if (results.map { (_, r) -> r.stateHash to r.poseHash }.distinct().size > 1) {
+            System.err.println("emulator robots=$n: the engines' state hashes differ")
+            disagreements++
+        }
+    }
+    if (disagreements > 0) exitProcess(1)
+}
+
+/** The engines to compare: `-Dpocketbot.bench.engines`, or both when the native one can run. */
+private fun engines(): List<FirmwareEngine> =
+    System.getProperty("pocketbot.bench.engines")?.split(',')?.map { FirmwareEngine.valueOf(it.trim().uppercase()) }
+        ?: listOfNotNull(FirmwareImage.compiled().engine.takeIf { it == FirmwareEngine.NATIVE }, FirmwareEngine.CHICORY)
+
+/**
+ * The same fleet natively (firmware/native/fleet.c, built by `make -C firmware native-fleet`): the firmware's wasm
+ * compiled to machine code, one instance per robot, driven as the emulator drives it, on one thread. Its CPU time
+ * per robot and simulated millisecond is what the emulator's is compared with (`native_ratio`).
+ */
+private class NativeFleet(private val binary: java.io.File) {
+    private val round = Worlds.load("round")
+    private val track = round.tapes.single() as Tape.Arc
+
+    /** CPU microseconds per robot and simulated millisecond for [n] robots. */
+    fun run(n: Int): Double {
+        val starts = round.starts.take(3).flatMap { listOf(it.xM, it.yM, it.headingDeg) }
+        val frame = Slip.encode(Frames.encode(LineFollow(1, 0, 0f), 1)).joinToString("") { "%02x".format(it) }
+        val args = listOf(binary.path, "$n", "${warmSeconds(n)}", "${measureSeconds(n)}", "${round.widthM}", "${track.center.x}",
+            "${track.center.y}", "${track.radiusM}", "${track.widthM}", "${round.ambientAdc}") + starts.map { "$it" } + frame
+        val process = ProcessBuilder(args).redirectError(ProcessBuilder.Redirect.INHERIT).start()
+        val out = process.inputStream.bufferedReader().readText()
+        check(process.waitFor() == 0) { "${binary.path} failed: $out" }
+        System.err.print("  " + out)
+        return Regex("cpu_us_per_robot_ms=([0-9.]+)").find(out)?.groupValues?.get(1)?.toDouble() ?: error("no result from ${binary.path}: $out")
     }
 }
+
+private fun warmSeconds(n: Int) = if (n >= 1000) 1 else 2
+
+private fun measureSeconds(n: Int) =
+    System.getProperty("pocketbot.bench.seconds")?.toIntOrNull() ?: when { n <= 1 -> 30; n <= 10 -> 20; n <= 100 -> 5; else -> 3 }
 
 private fun loadAverage(): String =
     runCatching { java.io.File("/proc/loadavg").readText().split(' ').take(3).joinToString(",") }.getOrDefault("?")
@@ -73,7 +134,7 @@ private fun liveHeap(): Long {
     return rt.totalMemory() - rt.freeMemory()
 }
 
-private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
+private fun run(image: FirmwareImage, n: Int, measureS: Int? = null, warmS: Int? = null): Result {
     val round = Worlds.load("round")
     val track = round.tapes.single() as Tape.Arc
     val tracks = ceil(n / 3.0).toInt()
@@ -88,7 +149,7 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
         },
     )
     val config = System.getProperty("pocketbot.bench.threads")?.toIntOrNull()
-        ?.let { EmulatorConfig(seed = 42, threads = it) } ?: EmulatorConfig(seed = 42)
+        ?.let { EmulatorConfig(seed = 42, firmware = image, threads = it) } ?: EmulatorConfig(seed = 42, firmware = image)
     Emulator(world, config).use { emu ->
         val emptyHeap = liveHeap()
         // A host that drives each robot (hello_request, set_role) and starts its line following; acknowledged commands
@@ -103,10 +164,10 @@ private fun run(n: Int, measureS: Int? = null, warmS: Int? = null): Result {
             val r = emu.addRobot(pose = pose)
             r.hostSendRaw(frame)
         }
-        val warm = warmS ?: if (n >= 1000) 1 else 2
+        val warm = warmS ?: warmSeconds(n)
         emu.runFor(warm.seconds)
         val heapPerRobot = (liveHeap() - emptyHeap) / n
-        val simS = measureS ?: System.getProperty("pocketbot.bench.seconds")?.toIntOrNull() ?: when { n <= 1 -> 30; n <= 10 -> 20; n <= 100 -> 5; else -> 3 }
+        val simS = measureS ?: measureSeconds(n)
         val os = java.lang.management.ManagementFactory.getOperatingSystemMXBean() as com.sun.management.OperatingSystemMXBean
         val cpu0 = os.processCpuTime
         val t0 = System.nanoTime()

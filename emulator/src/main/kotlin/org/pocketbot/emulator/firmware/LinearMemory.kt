@@ -13,12 +13,12 @@ import java.lang.invoke.VarHandle
 import java.nio.ByteOrder
 
 /**
- * A WebAssembly linear memory (not shared) held in one byte array, [bytes], that [FirmwareEngine] points at the
+ * A WebAssembly linear memory (not shared) held in one byte array, [bytes], that [ChicoryEngine] points at the
  * memory of the robot whose firmware it runs. One array instead of Chicory's array of 64 KiB pages: an access is one
  * bounds check and one load, and the memory's state is just the array (plus the data segments, which the engine
  * only shares between robots when the code never drops one).
  */
-internal class LinearMemory(private val limits: MemoryLimits) : Memory {
+internal class LinearMemory(private val limits: MemoryLimits) : Memory, FirmwareMemory {
     init {
         require(!limits.shared()) { "shared memories are not supported" }
     }
@@ -28,6 +28,7 @@ internal class LinearMemory(private val limits: MemoryLimits) : Memory {
 
     private var dataSegments: Array<DataSegment> = emptyArray()
 
+    override val size: Int get() = bytes.size
     override fun pages(): Int = bytes.size ushr 16
     override fun initialPages(): Int = limits.initialPages()
     override fun maximumPages(): Int = minOf(limits.maximumPages(), Memory.RUNTIME_MAX_PAGES)
@@ -65,6 +66,8 @@ internal class LinearMemory(private val limits: MemoryLimits) : Memory {
         checkRange(address, size, bytes.size)
         System.arraycopy(data, offset, bytes, address, size)
     }
+
+    override fun write(address: Int, data: ByteArray) = write(address, data, 0, data.size)
 
     override fun readBytes(address: Int, size: Int): ByteArray {
         checkRange(address, size, bytes.size)

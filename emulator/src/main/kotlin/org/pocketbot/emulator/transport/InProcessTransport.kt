@@ -4,6 +4,7 @@ import kotlinx.coroutines.channels.Channel
 import kotlinx.coroutines.channels.ReceiveChannel
 import kotlinx.coroutines.flow.Flow
 import kotlinx.coroutines.flow.flow
+import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.link.LinkConnection
 import org.pocketbot.emulator.link.RobotLink
 import org.pocketbot.emulator.link.RobotLinks
@@ -14,6 +15,7 @@ import org.pocketbot.sdk.transport.LinkRate
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.Transport
 import org.pocketbot.sdk.transport.TransportLostException
+import kotlin.time.Duration.Companion.seconds
 
 /**
  * A [Transport] to a robot of an emulator running in this JVM: frames are SLIP-encoded into a simulated serial link
@@ -68,18 +70,34 @@ internal class InProcessTransport(
     }
 }
 
-/** A robot of an embedded emulator, as a [Discoverer] finds it. */
+/**
+ * A robot of an embedded emulator, as a [Discoverer] finds it. [open] first makes sure that something steps the
+ * emulator (its own thread, a simulated run): without, the robot could never answer, and the connect would fail
+ * seconds later with a handshake timeout that does not say why.
+ */
 internal class InProcessDevice(
     override val name: String,
     override val address: String,
     private val links: RobotLinks,
+    private val emulator: Emulator,
 ) : RobotDevice {
-    override suspend fun open(): Transport = InProcessTransport(links, address)
+    override suspend fun open(): Transport {
+        if (!emulator.isStepped(NOT_STEPPED_AFTER)) throw TransportLostException(
+            "$address: the emulator is not running, so its robots cannot answer: call emulator.start() to run it in " +
+                "real time, or connect inside emulator.runSimulated { } to run it on simulated time",
+        )
+        return InProcessTransport(links, address)
+    }
 
     /** The simulated link's baud rate as it is set now ([org.pocketbot.emulator.RobotHandle.link]). */
     override val linkRate: LinkRate get() = LinkRate.ofBaud(links.settings.baud)
 
     override fun toString(): String = "$name ($address)"
+
+    private companion object {
+        /** Far longer than a step takes, however loaded the machine; simulated time in a simulated run. */
+        val NOT_STEPPED_AFTER = 2.seconds
+    }
 }
 
 /** Finds the robots of an embedded emulator: each robot present when [discover] is collected. */

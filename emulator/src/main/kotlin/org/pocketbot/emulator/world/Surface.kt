@@ -35,6 +35,8 @@ public class Surface(world: World) {
     // The grid flattened: pieces of cell c are cellItems[cellStart[c] until cellStart[c + 1]].
     private val cellStart: IntArray
     private val cellItems: IntArray
+    // Cells holding the same pieces in the same order share a number: spots in two such cells are done together.
+    private val cellGroup: IntArray
 
     init {
         val pieces = ArrayList<Piece>()
@@ -80,6 +82,8 @@ public class Surface(world: World) {
         for (c in 0 until cols * rows) cellStart[c + 1] = cellStart[c] + (lists[c]?.size ?: 0)
         cellItems = IntArray(cellStart[cols * rows])
         for (c in 0 until cols * rows) lists[c]?.forEachIndexed { k, p -> cellItems[cellStart[c] + k] = p }
+        val groups = HashMap<List<Int>, Int>()
+        cellGroup = IntArray(cols * rows) { c -> groups.getOrPut(lists[c].orEmpty()) { groups.size } }
     }
 
     /** Number of tape pieces (segments and arcs). */
@@ -123,10 +127,11 @@ public class Surface(world: World) {
         if (c0 < 0) { for (j in 0 until n) out[j] = irDarkness(xs[j], ys[j], spotRadiusM); return }
         val k0 = cellStart[c0]
         val len = cellStart[c0 + 1] - k0
+        val group = cellGroup[c0]
         for (j in 1 until n) {
             val c = cellIndex(xs[j], ys[j])
             if (c == c0) continue
-            if (c < 0 || cellStart[c + 1] - cellStart[c] != len || !sameItems(cellStart[c], k0, len)) {
+            if (c < 0 || cellGroup[c] != group) {
                 for (i in 0 until n) out[i] = irDarkness(xs[i], ys[i], spotRadiusM)
                 return
             }
@@ -151,11 +156,6 @@ public class Surface(world: World) {
                 if (c > 0.0) out[j] += (dk - out[j]) * c
             }
         }
-    }
-
-    private fun sameItems(a: Int, b: Int, len: Int): Boolean {
-        for (i in 0 until len) if (cellItems[a + i] != cellItems[b + i]) return false
-        return true
     }
 
     /** Colour under a spot, blended like [irDarkness]; writes r, g, b (0..255) into [out]. */

@@ -11,11 +11,11 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.emulator.bluetooth.VirtualBluetooth
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.protocol.ProtocolInfo
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.StateUpdate
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.connect
 import org.pocketbot.sdk.transport.TcpFraming
 import org.pocketbot.sdk.transport.TcpRobotDevice
@@ -87,7 +87,7 @@ private suspend fun CoroutineScope.connectWhenReachable(device: TcpRobotDevice):
     val deadline = TimeSource.Monotonic.markNow() + 10.seconds
     while (true) {
         try {
-            return device.connect(this, RobotOptions(settingsCache = InMemorySettingsCache()))
+            return device.connect(this, RobotOptions { settingsCache = InMemorySettingsCache() })
         } catch (e: Exception) {
             if (deadline.hasPassedNow()) throw IllegalStateException("${device.address} not reachable in 10 s", e)
             delay(100.milliseconds)

@@ -222,9 +222,9 @@ internal object FleetBench {
         } else {
             devices = List(n) { i -> InProcessStandIn(responders[i]) { sinks[i] = it } }
         }
-        val fleet = Fleet(scope, RobotOptions(settingsCache = InMemorySettingsCache()))
+        val fleet = Fleet(scope, RobotOptions { settingsCache = InMemorySettingsCache() })
         val robots = fleet.connectAll(devices)
-        robots.forEach { it.reflector.set(org.pocketbot.protocol.SyncMode.FULL, PERIOD_MS.milliseconds) }
+        robots.forEach { it.reflector.set(org.pocketbot.sdk.SyncMode.FULL, PERIOD_MS.milliseconds) }
         robots.forEachIndexed { i, r ->
             scope.launch(Dispatchers.Unconfined) {
                 r.stateUpdates.collect { u ->

@@ -16,11 +16,11 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.Slip
 import org.pocketbot.protocol.StateReduced
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Fleet
 import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.StateUpdate
+import org.pocketbot.sdk.SyncMode
 import kotlin.time.Duration.Companion.milliseconds
 
 /**
@@ -163,7 +163,7 @@ private fun connect() {
             emu.start(Speed.Realtime(1.0))
             val ms = runBlocking {
                 delay(100) // let the firmware boot
-                val fleet = Fleet(this, RobotOptions(settingsCache = InMemorySettingsCache()))
+                val fleet = Fleet(this, RobotOptions { settingsCache = InMemorySettingsCache() })
                 val devices = emu.discoverer().discover().toList()
                 val t0 = System.nanoTime()
                 fleet.connectAll(devices)
@@ -195,7 +195,7 @@ private fun realtime() {
         val proxies = emu.robots.map { StampingProxy(it.tcpPort) }
         val devices = emu.robots.mapIndexed { i, r -> org.pocketbot.sdk.transport.TcpRobotDevice("127.0.0.1", proxies[i].port, r.name) }
         val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
-        val fleet = Fleet(scope, RobotOptions(settingsCache = InMemorySettingsCache()))
+        val fleet = Fleet(scope, RobotOptions { settingsCache = InMemorySettingsCache() })
         val robots = runBlocking { fleet.connectAll(devices) }
         val latencies = java.util.concurrent.ConcurrentLinkedQueue<Long>()
         var measuring = false
@@ -224,7 +224,7 @@ private fun realtime() {
         measuring = false
         val after = robots.map { it.linkStats.value }
 
-        val fullFrame = Slip.encode(Frames.encode(org.pocketbot.protocol.StateFull(robots[0].state.value), 1)).size
+        val fullFrame = Slip.encode(Frames.encode(org.pocketbot.protocol.StateFull(org.pocketbot.protocol.RobotState.decode(ByteArray(org.pocketbot.protocol.ProtocolInfo.STATE_SIZE), 0)), 1)).size
         val reducedFrame = Slip.encode(Frames.encode(StateReduced(1, 1, 1, 1, 1, 1, 1), 1)).size
         val fullCapacity = baud / 10 / fullFrame
         val reducedCapacity = baud / 10 / reducedFrame

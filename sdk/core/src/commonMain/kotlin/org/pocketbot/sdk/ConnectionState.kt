@@ -1,7 +1,8 @@
 package org.pocketbot.sdk
 
 /**
- * Where the link to one robot stands. [Robot.connection] moves through
+ * Where the link to one robot stands. Its states are classes, not data classes, so that a later field does not
+ * break callers: compare them with `==` or `is`, read their properties by name. [Robot.connection] moves through
  * `Connecting -> Connected -> Lost -> Reconnecting -> Connected ... -> Closed`.
  */
 public sealed class ConnectionState {
@@ -16,13 +17,25 @@ public sealed class ConnectionState {
      * moves to [Reconnecting]. Commands issued now wait for the new link; none is lost. While the link is down the
      * robot's own link failsafe may stop it (see [Locomotion]).
      */
-    public data class Lost(public val reason: String) : ConnectionState()
+    public class Lost(public val reason: String) : ConnectionState() {
+        override fun equals(other: Any?): Boolean = other is Lost && reason == other.reason
+        override fun hashCode(): Int = reason.hashCode()
+        override fun toString(): String = "Lost(reason=$reason)"
+    }
 
     /** Attempt number [attempt] (from 1) to open a new link and repeat the handshake is running. */
-    public data class Reconnecting(public val attempt: Int) : ConnectionState()
+    public class Reconnecting(public val attempt: Int) : ConnectionState() {
+        override fun equals(other: Any?): Boolean = other is Reconnecting && attempt == other.attempt
+        override fun hashCode(): Int = attempt
+        override fun toString(): String = "Reconnecting(attempt=$attempt)"
+    }
 
     /** The robot was closed by [Robot.close] ([cause] null) or given up on ([cause] says why). Final. */
-    public data class Closed(public val cause: Throwable?) : ConnectionState()
+    public class Closed(public val cause: Throwable?) : ConnectionState() {
+        override fun equals(other: Any?): Boolean = other is Closed && cause == other.cause
+        override fun hashCode(): Int = cause?.hashCode() ?: 0
+        override fun toString(): String = "Closed(cause=$cause)"
+    }
 }
 
 /**

@@ -4,7 +4,6 @@ import kotlinx.coroutines.channels.BufferOverflow
 import kotlinx.coroutines.flow.MutableSharedFlow
 import kotlinx.coroutines.flow.SharedFlow
 import kotlinx.coroutines.flow.asSharedFlow
-import org.pocketbot.protocol.DebugModule
 import org.pocketbot.protocol.DebugText
 
 /** Where a [DebugMessage] comes from. */

@@ -1,7 +1,7 @@
 package org.pocketbot.sdk
 
-import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.PACKET_SPECS
+import org.pocketbot.sdk.transport.RobotDevice
 
 /** Base of every error the SDK throws about a robot. */
 public open class RobotException(message: String, cause: Throwable? = null) : Exception(message, cause)
@@ -102,6 +102,20 @@ public class RobotClosedException internal constructor(message: String, cause: T
 
 /** The first link to a robot could not be established (no answer to `hello_request`, transport failed). */
 public class ConnectFailedException internal constructor(message: String, cause: Throwable? = null) : RobotException(message, cause)
+
+/**
+ * Fewer robots than asked for turned up within [timeout]: [found] lists those that did (none of them was connected).
+ */
+public class RobotsNotFoundException internal constructor(
+    /** How many robots were asked for. */
+    public val wanted: Int,
+    /** The devices found, in the order they turned up. */
+    public val found: List<RobotDevice>,
+    timeout: kotlin.time.Duration,
+) : RobotException(
+    "found ${found.size} of $wanted robots within $timeout" +
+        if (found.isEmpty()) "" else ": " + found.joinToString { if (it.name == it.address) it.address else "${it.name} at ${it.address}" },
+)
 
 internal fun commandName(packetType: Int): String = PACKET_SPECS[packetType]?.name ?: "packet 0x${packetType.toString(16)}"
 

@@ -11,7 +11,6 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.withContext
 import kotlinx.coroutines.withTimeoutOrNull
-import org.pocketbot.protocol.SyncMode
 import kotlin.time.Duration
 import kotlin.time.Duration.Companion.milliseconds
 

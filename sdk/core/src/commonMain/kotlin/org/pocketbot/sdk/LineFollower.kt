@@ -3,11 +3,7 @@ package org.pocketbot.sdk
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
-import org.pocketbot.protocol.Colour
-import org.pocketbot.protocol.ColourMode
 import org.pocketbot.protocol.LineFollow
-import org.pocketbot.protocol.LineFollowStatus
-import org.pocketbot.protocol.StateLineFollow
 import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.link.LinkPort
 
@@ -20,7 +16,7 @@ public class LineFollower internal constructor(private val link: LinkPort) {
     private val _status = MutableStateFlow(EMPTY_STATE.lineFollow)
 
     /** Status (off, following, lost) and the colour of the segment under the robot (full state only). */
-    public val status: StateFlow<StateLineFollow> = _status.asStateFlow()
+    public val status: StateFlow<RobotState.LineFollow> = _status.asStateFlow()
 
     /** The follower's status. */
     public val followStatus: LineFollowStatus get() = _status.value.status
@@ -44,7 +40,7 @@ public class LineFollower internal constructor(private val link: LinkPort) {
         link.command(LineFollow(0, ColourMode.PLAIN.code, 0f))
     }
 
-    internal fun update(s: StateLineFollow) {
+    internal fun update(s: RobotState.LineFollow) {
         _status.value = s
     }
 }

@@ -6,18 +6,15 @@ import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
-import org.pocketbot.protocol.LocoMode
+import kotlinx.coroutines.flow.first
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
 import org.pocketbot.protocol.MovementDone
 import org.pocketbot.protocol.MovementLog
-import org.pocketbot.protocol.MovementOutcome as WireOutcome
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.ReadMovements
 import org.pocketbot.protocol.Settings
-import org.pocketbot.protocol.StateEncoders
-import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.Stop
 import org.pocketbot.protocol.WheelSpeeds
 import org.pocketbot.sdk.internal.EMPTY_STATE
@@ -51,6 +48,9 @@ public class MovementHandle internal constructor(
 
     /** How much of it this host saw done (from the encoders while the robot reported it running), or null. */
     internal var seenDone: Double? = null
+
+    /** How many state updates had arrived when it ended: [Locomotion.awaitSettled] waits for one more, at rest. */
+    internal var endedAtState = -1L
 
     /** True once it ended. */
     public val isDone: Boolean get() = result.isCompleted
@@ -113,8 +113,11 @@ public class Locomotion internal constructor(
     private var lastRight = 0
     private var lastTimeMs = -1L
 
+    // State updates so far, and whether the last one had both wheels standing: what awaitSettled waits on.
+    private val statesSeen = MutableStateFlow(StatesSeen(0, false))
+
     /** Mode, queue length, current and last finished movement id, as the robot reported them (full state only). */
-    public val state: StateFlow<StateLocomotion> = _state.asStateFlow()
+    public val state: StateFlow<RobotState.Locomotion> = _state.asStateFlow()
 
     /** What drives the motors now. */
     public val mode: LocoMode get() = modeOf(_state.value)
@@ -162,10 +165,85 @@ public class Locomotion internal constructor(
         return handle
     }
 
-    /** Suspends until every movement this host queued so far has ended. */
+    /**
+     * Runs [program] on the robot, in order, however long it is, and returns how each movement ended. The robot holds
+     * at most [QUEUE_CAPACITY] movements (the running one included); this queues as many as fit, then the next as
+     * each one ends, so the robot always has the next movement at hand and drives the program without a pause between
+     * movements. When a movement does not finish (a stop, the failsafe, a restart) the rest of the program is not
+     * sent: the result list ends with that movement and those the robot dropped with it.
+     *
+     * ```
+     * val square = List(4) { listOf(Movement.Straight(0.10, 0.2), Movement.Rotate(90.0, 0.2)) }.flatten()
+     * robot.locomotion.runProgram(square + square + square)   // 24 movements
+     * ```
+     *
+     * [org.pocketbot.sdk.Fleet.runTogether] starts programs on several robots at the same moment.
+     *
+     * @throws CommandRefusedException when the robot refuses a movement.
+     */
+    public suspend fun runProgram(program: List<Movement>): List<MovementResult> = feed(emptyList(), program.iterator())
+
+    /** Runs the program whose first movements are [queued] already and whose others are [rest] (see [runProgram]). */
+    internal suspend fun feed(queued: List<MovementHandle>, rest: Iterator<Movement>): List<MovementResult> {
+        val open = ArrayDeque(queued)
+        val results = ArrayList<MovementResult>()
+        var ended = false
+        while (true) {
+            while (!ended && rest.hasNext() && link.serial { outstanding.size } < QUEUE_CAPACITY) open.addLast(enqueue(rest.next()))
+            val next = open.removeFirstOrNull()
+            if (next == null) {
+                if (ended || !rest.hasNext()) return results
+                // Movements queued before the program fill the robot's queue: wait until one of them ends.
+                link.serial { outstanding.firstOrNull() }?.await()
+                continue
+            }
+            val result = next.await()
+            results += result
+            if (result.outcome != MovementOutcome.FINISHED) ended = true
+        }
+    }
+
+    /**
+     * Suspends until every movement this host queued so far has ended. It returns on the robot's report of the last
+     * one (`movement_done`), which comes before the state that carries the final wheel counts: [Robot.odometry] and
+     * [Robot.state] may still show the robot a little short of where it stopped. [awaitSettled] waits for that state.
+     */
     public suspend fun awaitIdle() {
         val handles = link.serial { outstanding.toList() }
         for (h in handles) h.await()
+    }
+
+    /**
+     * Suspends until every movement this host queued so far has ended (as [awaitIdle]) and the robot then reported a
+     * state with both wheels at rest: the encoder counts in [Robot.state], [Robot.odometry] and
+     * [Robot.motors] are then those the robot stopped at, and later states say the same until the robot moves again.
+     * Returns at once when nothing was queued and the last state showed the robot at rest.
+     *
+     * ```
+     * robot.locomotion.enqueue(Movement.Straight(distanceM = 0.10, speedMps = 0.2))
+     * robot.locomotion.awaitSettled()
+     * println(robot.odometry.pose.value)   // where the robot stopped
+     * ```
+     *
+     * It needs the robot's state reports: with [org.pocketbot.protocol.SyncMode.NONE] none comes and it waits for
+     * ever (bound it with a timeout). Reduced states do (they carry the encoders and wheel speeds).
+     *
+     * @throws RobotClosedException when the robot is closed first.
+     */
+    public suspend fun awaitSettled() {
+        val handles = link.serial { outstanding.toList() }
+        for (h in handles) h.await()
+        val after = link.serial { handles.maxOfOrNull { it.endedAtState } ?: -1L }
+        val settled = CompletableDeferred<Unit>()
+        val watch = link.launch {
+            statesSeen.first { it.count > after && it.atRest }
+            settled.complete(Unit)
+        }
+        try {
+            link.awaitOrClosed(settled)
+        } finally {
+            watch.cancel()
+        }
     }
 
     /**
@@ -196,7 +274,7 @@ public class Locomotion internal constructor(
         val index = outstanding.indexOfFirst { it.id == p.id }
         if (index < 0) return
         val h = outstanding[index]
-        val outcome = outcomeOf(p.outcome)
+        val outcome = MovementOutcome.fromCode(p.outcome)
         end(h, outcome, p.done.toDouble(), describe(outcome))
         // The robot reports in queue order: an earlier movement still open lost its report on the way.
         if ((0 until index).any { outstanding.getOrNull(it)?.acked == true }) checkLogSoon()
@@ -218,7 +296,8 @@ public class Locomotion internal constructor(
      * Every state update: what the running movement did so far, as this host sees it in the encoder counts (kept for
      * when the robot cannot tell any more: a restart).
      */
-    internal fun watch(encoders: StateEncoders, timeMs: Long) {
+    internal fun watch(encoders: RobotState.Encoders, timeMs: Long, atRest: Boolean) {
+        statesSeen.value = StatesSeen(statesSeen.value.count + 1, atRest)
         if (lastTimeMs >= 0 && timeMs < lastTimeMs) running = null // the robot restarted: its counts begin again
         lastTimeMs = timeMs
         lastLeft = encoders.left
@@ -233,7 +312,7 @@ public class Locomotion internal constructor(
         }
     }
 
-    internal fun update(s: StateLocomotion, timeMs: Long) {
+    internal fun update(s: RobotState.Locomotion, timeMs: Long) {
         _state.value = s
         if (running?.id != s.currentId) {
             running = outstanding.firstOrNull { it.id == s.currentId }
@@ -280,7 +359,7 @@ public class Locomotion internal constructor(
 
     private fun settle(log: MovementLog, resumed: Boolean, restarted: Boolean = false) {
         val entries = HashMap<Int, Pair<MovementOutcome, Float>>()
-        for (i in 0 until log.count.coerceIn(0, log.ids.size)) entries[log.ids[i]] = outcomeOf(log.outcomes[i]) to log.done[i]
+        for (i in 0 until log.count.coerceIn(0, log.ids.size)) entries[log.ids[i]] = MovementOutcome.fromCode(log.outcomes[i]) to log.done[i]
         for (h in outstanding.toList()) {
             val e = entries[h.id] ?: continue
             end(h, e.first, e.second.toDouble(), describe(e.first))
@@ -326,6 +405,7 @@ public class Locomotion internal constructor(
     }
 
     private fun end(h: MovementHandle, outcome: MovementOutcome, done: Double?, detail: String) {
+        h.endedAtState = statesSeen.value.count
         if (!h.result.complete(MovementResult(h.movement, outcome, done, detail))) return
         outstanding.remove(h)
         if (running === h) running = null
@@ -339,21 +419,21 @@ public class Locomotion internal constructor(
         _queue.value = outstanding.toList()
     }
 
-    private companion object {
+    private class StatesSeen(val count: Long, val atRest: Boolean)
+
+    public companion object {
+        /**
+         * How many movements a robot holds, the running one included: one more is refused with `QUEUE_FULL` until
+         * one ends. [runProgram] and [org.pocketbot.sdk.Fleet.runTogether] feed longer programs as the queue drains.
+         */
+        public const val QUEUE_CAPACITY: Int = 16
+
         /** Longer than the robot takes to stand still and report after a movement ends (about 300 ms at most). */
-        const val SETTLE_MS = 500L
+        private const val SETTLE_MS = 500L
 
-        fun outcomeOf(code: Int): MovementOutcome = when (code) {
-            WireOutcome.FINISHED.code -> MovementOutcome.FINISHED
-            WireOutcome.STOPPED.code -> MovementOutcome.STOPPED
-            WireOutcome.FAILSAFE.code -> MovementOutcome.FAILSAFE
-            WireOutcome.DROPPED.code -> MovementOutcome.DROPPED
-            else -> MovementOutcome.LOST
-        }
+        private fun modeOf(s: RobotState.Locomotion): LocoMode = s.mode
 
-        fun modeOf(s: StateLocomotion): LocoMode = s.mode
-
-        fun describe(o: MovementOutcome): String = when (o) {
+        private fun describe(o: MovementOutcome): String = when (o) {
             MovementOutcome.FINISHED -> "finished"
             MovementOutcome.STOPPED -> "stopped by a host's command"
             MovementOutcome.FAILSAFE -> "cut by the robot's link failsafe: no packet from the host for link.failsafe_timeout_ms"

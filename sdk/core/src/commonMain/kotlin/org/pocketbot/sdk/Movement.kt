@@ -16,8 +16,8 @@ public sealed class Movement {
     /** The main quantity asked for, in [unit]. */
     public abstract val amount: Double
 
-    /** The unit of [amount] and of [MovementResult.done]: `m` or `deg`. */
-    public abstract val unit: String
+    /** The unit of [amount] and of [MovementResult.done]: metres or degrees. */
+    public abstract val unit: MovementUnit
 
     /**
      * Drive [distanceM] metres straight (negative: backwards) at a cruise speed of [speedMps] m/s (> 0).
@@ -33,7 +33,7 @@ public sealed class Movement {
         }
 
         override val amount: Double get() = distanceM
-        override val unit: String get() = "m"
+        override val unit: MovementUnit get() = MovementUnit.METRE
         override fun toPacket(id: Int): Packet = MoveStraight(id, distanceM.toFloat(), speedMps.toFloat())
         override fun equals(other: Any?): Boolean = other is Straight && distanceM == other.distanceM && speedMps == other.speedMps
         override fun hashCode(): Int = distanceM.hashCode() * 31 + speedMps.hashCode()
@@ -48,7 +48,7 @@ public sealed class Movement {
         }
 
         override val amount: Double get() = angleDeg
-        override val unit: String get() = "deg"
+        override val unit: MovementUnit get() = MovementUnit.DEGREE
         override fun toPacket(id: Int): Packet = MoveRotate(id, angleDeg.toFloat(), speedMps.toFloat())
         override fun equals(other: Any?): Boolean = other is Rotate && angleDeg == other.angleDeg && speedMps == other.speedMps
         override fun hashCode(): Int = angleDeg.hashCode() * 31 + speedMps.hashCode()
@@ -67,7 +67,7 @@ public sealed class Movement {
         }
 
         override val amount: Double get() = angleDeg
-        override val unit: String get() = "deg"
+        override val unit: MovementUnit get() = MovementUnit.DEGREE
         override fun toPacket(id: Int): Packet = MoveArc(id, radiusM.toFloat(), angleDeg.toFloat(), speedMps.toFloat())
         override fun equals(other: Any?): Boolean =
             other is Arc && radiusM == other.radiusM && angleDeg == other.angleDeg && speedMps == other.speedMps
@@ -77,28 +77,20 @@ public sealed class Movement {
     }
 }
 
-/** How a queued movement ended. */
-public enum class MovementOutcome {
-    /** It ran to its end. */
-    FINISHED,
+/** The unit of a movement's main quantity ([Movement.amount]) and of what was done of it ([MovementResult.done]). */
+public enum class MovementUnit(
+    /** As people write it after a number: `m`, `deg`. */
+    public val symbol: String,
+) {
+    /** Metres: [Movement.Straight]. */
+    METRE("m"),
 
-    /** A host's command ([Locomotion.stop], from this host or one that watches; teleoperation, line following) ended it while it ran. */
-    STOPPED,
+    /** Degrees: [Movement.Rotate], [Movement.Arc]. */
+    DEGREE("deg"),
+    ;
 
-    /**
-     * The robot's link failsafe ended it, running or still queued: the robot heard nothing from the host for
-     * settings.link.failsafe_timeout_ms and stopped on its own.
-     */
-    FAILSAFE,
-
-    /** It never started: a stop (or teleoperation, line following) cleared it from the queue, or withdrew it before it was sent. */
-    DROPPED,
-
-    /**
-     * The robot no longer holds it and has no record of how it ended: it restarted (see [RobotEvent.Restarted]), or
-     * its log no longer goes back that far. [MovementResult.done] is what this host saw it do, when it saw it run.
-     */
-    LOST,
+    /** [symbol], so that `"$done ${movement.unit}"` reads `0.1 m`. */
+    override fun toString(): String = symbol
 }
 
 /**

@@ -4,7 +4,6 @@ import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
 import org.pocketbot.protocol.Settings
-import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.math.PI
 import kotlin.math.abs
@@ -34,6 +33,14 @@ public class WheelDistances internal constructor(public val leftM: Double, publi
  * the headings before and after the update. r, l and T come from the robot's settings (geometry.wheel_diameter_m,
  * geometry.wheel_base_m, encoder.pulses_per_rev), read again on every update.
  *
+ * **Heading convention**, the same as the emulator's ground truth (`RobotHandle.truePose`): counter-clockwise
+ * positive from +x, wrapped to -180..180 degrees (-pi..pi rad), so that a robot that turned a full circle left reads
+ * about 0 again, not 360. A robot's total turn is in [wheelDistances] ((right - left) / wheel base).
+ *
+ * Odometry starts at the origin facing +x when the robot connects; [reset] starts it at a given pose (such as where
+ * the robot really stands: in the emulator `robot.odometry.reset(emulator.robot(id).truePose)`), also before the
+ * first state update.
+ *
  * When the robot resets (its clock starts again) its counts restart at zero: odometry keeps the pose it had and
  * counts on from the new zero; what the robot did while it was unheard is not known.
  */
@@ -50,15 +57,24 @@ public class Odometry internal constructor(private val link: LinkPort, private v
     private var carryLeft = 0L
     private var carryRight = 0L
     private var baseHeading = 0.0
+    private var heading = 0.0 // unwrapped: the mean of two headings needs no care at +-pi
     private var x = 0.0
     private var y = 0.0
     private var travelled = 0.0
 
-    /** The dead-reckoned pose, updated with every state update. */
+    /** The dead-reckoned pose, updated with every state update; its heading is in -pi..pi (see above). */
     public val pose: StateFlow<Pose> = _pose.asStateFlow()
 
-    /** The dead-reckoned path: a point whenever the pose moved 1 mm or turned 1 degree (see [Trajectory]). */
-    public val trajectory: Trajectory = Trajectory()
+    private val path = Trajectory()
+
+    /**
+     * The dead-reckoned path: a point whenever the pose moved 1 mm or turned about 1 degree (see [Trajectory]).
+     * Odometry records it; [clearTrajectory] starts it again.
+     */
+    public val trajectory: ReadOnlyTrajectory get() = path
+
+    /** Forgets the [trajectory] so far: it goes on from the next pose. Safe to call from any thread. */
+    public fun clearTrajectory(): Unit = path.clear()
 
     /** The wheel distances and the distance travelled since [reset], from the encoders and the robot's geometry. */
     public val wheelDistances: StateFlow<WheelDistances> = _wheels.asStateFlow()
@@ -71,7 +87,7 @@ public class Odometry internal constructor(private val link: LinkPort, private v
      */
     public suspend fun reset(pose: Pose = Pose.ORIGIN) {
         link.serial {
-            trajectory.clear()
+            path.clear()
             if (started) rebase(lastLeft, lastRight, pose) else pendingReset = pose
         }
     }
@@ -84,11 +100,12 @@ public class Odometry internal constructor(private val link: LinkPort, private v
         lastLeft = left
         lastRight = right
         baseHeading = p.headingRad
+        heading = p.headingRad
         travelled = 0.0
         x = p.xM
         y = p.yM
-        _pose.value = p
-        trajectory.add(lastTimeMs, p)
+        _pose.value = Pose(x, y, wrapAngle(heading))
+        path.add(lastTimeMs, _pose.value)
         publishWheels()
     }
 
@@ -100,7 +117,7 @@ public class Odometry internal constructor(private val link: LinkPort, private v
     private fun metresPerPulse(): Double = settings.store.values.value.metresPerPulse
     private fun wheelBase(): Double = settings.store.values.value.geometry.wheelBaseM.toDouble()
 
-    internal fun update(encoders: StateEncoders, timeMs: Long) {
+    internal fun update(encoders: RobotState.Encoders, timeMs: Long) {
         val reset = lastTimeMs >= 0 && timeMs < lastTimeMs
         lastTimeMs = timeMs
         if (!started) {
@@ -124,8 +141,8 @@ public class Odometry internal constructor(private val link: LinkPort, private v
         val t1 = encoders.left - lastLeft
         val t2 = encoders.right - lastRight
         if (t1 == 0 && t2 == 0) return
-        val before = _pose.value.headingRad
-        val heading = baseHeading + metresPerPulse / wheelBase() * (totalRight(encoders.right) - totalLeft(encoders.left)).toDouble()
+        val before = heading
+        heading = baseHeading + metresPerPulse / wheelBase() * (totalRight(encoders.right) - totalLeft(encoders.left)).toDouble()
         val d = metresPerPulse * (t1.toDouble() + t2.toDouble()) / 2.0
         val mid = (before + heading) / 2.0
         x += d * cos(mid)
@@ -133,14 +150,24 @@ public class Odometry internal constructor(private val link: LinkPort, private v
         travelled += abs(d)
         lastLeft = encoders.left
         lastRight = encoders.right
-        _pose.value = Pose(x, y, heading)
-        trajectory.add(timeMs, _pose.value)
+        _pose.value = Pose(x, y, wrapAngle(heading))
+        path.add(timeMs, _pose.value)
         publishWheels()
     }
 
     private fun publishWheels() {
         val m = metresPerPulse()
         _wheels.value = WheelDistances(totalLeft(lastLeft) * m, totalRight(lastRight) * m, travelled)
+    }
+}
+
+/** [rad] as an angle in -pi..pi: the SDK's heading convention (see [Odometry]). */
+internal fun wrapAngle(rad: Double): Double {
+    val r = rad % (2 * PI)
+    return when {
+        r > PI -> r - 2 * PI
+        r < -PI -> r + 2 * PI
+        else -> r
     }
 }
 

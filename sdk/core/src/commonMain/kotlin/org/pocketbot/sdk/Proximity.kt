@@ -7,22 +7,16 @@ import kotlinx.coroutines.flow.SharedFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asSharedFlow
 import kotlinx.coroutines.flow.asStateFlow
-import org.pocketbot.protocol.DistanceClass
-import org.pocketbot.protocol.IrLed
 import org.pocketbot.protocol.IrReceived
 import org.pocketbot.protocol.IrSend
-import org.pocketbot.protocol.ProximityFlags
-import org.pocketbot.protocol.ProximitySide
-import org.pocketbot.protocol.Side
-import org.pocketbot.protocol.StateProximity
 import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.link.LinkPort
 
 /** True when this receiver sees an obstacle by its own IR reflection (no robot's beacon). */
-public val ProximitySide.seesObstacle: Boolean get() = flags and ProximityFlags.OBSTACLE != 0
+public val RobotState.ProximitySide.seesObstacle: Boolean get() = ProximityFlag.OBSTACLE in flags
 
-/** True when this receiver hears another robot's beacon ([ProximitySide.robotId] says which). */
-public val ProximitySide.hearsRobot: Boolean get() = flags and ProximityFlags.ROBOT != 0
+/** True when this receiver hears another robot's beacon ([RobotState.ProximitySide.robotId] says which). */
+public val RobotState.ProximitySide.hearsRobot: Boolean get() = ProximityFlag.ROBOT in flags
 
 /**
  * Another robot seen by one of our IR receivers.
@@ -79,7 +73,7 @@ public class Proximity internal constructor(private val link: LinkPort) {
     private val _messages = MutableSharedFlow<IrMessage>(extraBufferCapacity = 64, onBufferOverflow = BufferOverflow.DROP_OLDEST)
 
     /** What the front and rear receivers see (full state only). */
-    public val state: StateFlow<StateProximity> = _state.asStateFlow()
+    public val state: StateFlow<RobotState.Proximity> = _state.asStateFlow()
 
     /** New or changed sightings of other robots. */
     public val encounters: SharedFlow<Encounter> = _encounters.asSharedFlow()
@@ -103,14 +97,14 @@ public class Proximity internal constructor(private val link: LinkPort) {
         link.command(IrSend(powerPercent, payload.copyOf()))
     }
 
-    internal fun update(s: StateProximity, timeMs: Long) {
+    internal fun update(s: RobotState.Proximity, timeMs: Long) {
         val before = _state.value
         _state.value = s
         check(Side.FRONT, before.front, s.front, timeMs)
         check(Side.REAR, before.rear, s.rear, timeMs)
     }
 
-    private fun check(side: Side, before: ProximitySide, now: ProximitySide, timeMs: Long) {
+    private fun check(side: Side, before: RobotState.ProximitySide, now: RobotState.ProximitySide, timeMs: Long) {
         val hears = now.hearsRobot && now.robotId != 0
         if (!hears) return
         val heard = before.hearsRobot && before.robotId != 0

@@ -1,12 +1,15 @@
 package org.pocketbot.sdk
 
 import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.CompletableJob
 import kotlinx.coroutines.CoroutineName
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.ExperimentalCoroutinesApi
 import kotlinx.coroutines.Job
 import kotlinx.coroutines.SupervisorJob
+import kotlinx.coroutines.awaitCancellation
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.channels.BufferOverflow
 import kotlinx.coroutines.flow.MutableSharedFlow
 import kotlinx.coroutines.flow.MutableStateFlow
@@ -22,10 +25,8 @@ import org.pocketbot.protocol.IrReceived
 import org.pocketbot.protocol.MovementDone
 import org.pocketbot.protocol.MovementLog
 import org.pocketbot.protocol.Packet
-import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.StateFull
 import org.pocketbot.protocol.StateReduced
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.SettingsMirror
 import org.pocketbot.sdk.internal.link.Link
@@ -41,10 +42,11 @@ import kotlin.time.Duration.Companion.milliseconds
  * SDK's protocol, learns the settings (from [RobotOptions.settingsCache] when the robot's settings checksum matches,
  * else with `read_settings`) and asks for state in [RobotOptions.syncMode]. Suspends until all that is done.
  *
- * The robot is bound to [scope]: when the scope's [Job] completes or is cancelled the robot closes, so it never
- * outlives the code that made it; it does not keep the scope from completing. Its own work (reading the link,
- * heartbeats, reconnects) runs on [Dispatchers.Default], never on the caller's thread, unless the scope's context
- * holds a [RobotRuntime].
+ * The robot belongs to [scope], as a child [Job] of it (as Kable's peripherals and Ktor's clients do): all of its
+ * work (reading the link, heartbeats, reconnects) runs under that job, so cancelling the scope closes the robot, and
+ * the scope does not complete while the robot is open: [close] it (`use {}`) or [Robot.disconnect] it, and nothing
+ * it started outlives the scope. Its work runs on [Dispatchers.Default], never on the caller's thread, unless the
+ * scope's context holds a [RobotRuntime].
  *
  * ```
  * runBlocking {
@@ -56,9 +58,11 @@ import kotlin.time.Duration.Companion.milliseconds
  *
  * @throws ProtocolMismatchException when the firmware speaks another protocol version or layout.
  * @throws ConnectFailedException when the robot cannot be reached or does not answer.
+ * @throws IllegalStateException when [scope] has ended already (cancelled or completed).
  */
 public suspend fun RobotDevice.connect(scope: CoroutineScope, options: RobotOptions = RobotOptions()): Robot {
     val robot = Robot(this, scope, options)
+    check(robot.lifetime.isActive) { "cannot connect ${this.name}: its scope has ended (${scope.coroutineContext[Job]})" }
     try {
         robot.link.start()
     } catch (e: Throwable) {
@@ -88,7 +92,9 @@ public class Robot internal constructor(
     /** The options it was connected with. */
     public val options: RobotOptions,
 ) : AutoCloseable {
-    private val job = SupervisorJob()
+    /** The robot in its caller's scope: a child of the scope's job, complete once all of the robot's work ended. */
+    internal val lifetime: CompletableJob
+    private val job: CompletableJob
     private val _state = MutableStateFlow(EMPTY_STATE)
     private val _stateUpdates = MutableSharedFlow<StateUpdate>(extraBufferCapacity = 256, onBufferOverflow = BufferOverflow.DROP_OLDEST)
     private val firstFullState = CompletableDeferred<Unit>()
@@ -105,14 +111,20 @@ public class Robot internal constructor(
         // (already one thread), else a serial view of Dispatchers.Default.
         @OptIn(ExperimentalCoroutinesApi::class)
         val serial = runtime?.dispatcher?.limitedParallelism(1) ?: device.eventLoop ?: Dispatchers.Default.limitedParallelism(1)
+        lifetime = Job(context[Job])
+        // The link's coroutines; cancelled at close, while the goodbye still goes out under [lifetime].
+        job = SupervisorJob(lifetime)
         val own = CoroutineScope(serial + job + CoroutineName("robot ${device.name}"))
-        link = Link(device, options, serial, own, job, debugLog, runtime?.random ?: Random.Default)
-        val bound = context[Job]?.invokeOnCompletion { cause ->
-            link.close(cause?.let { RobotClosedException("the scope of robot ${device.name} ended", it) })
+        link = Link(device, options, serial, own, job, lifetime, debugLog, runtime?.random ?: Random.Default)
+        // The scope cancelled: the link closes (its transport too, which a read may be waiting on).
+        own.launch {
+            try {
+                awaitCancellation()
+            } finally {
+                link.close(RobotClosedException("the scope of robot ${device.name} ended"))
+            }
         }
-        // A long-lived scope must not keep every robot it ever connected reachable.
         job.invokeOnCompletion {
-            bound?.dispose()
             firstFullState.completeExceptionally(RobotClosedException("robot ${device.name} closed before it reported a state"))
         }
     }
@@ -244,7 +256,7 @@ public class Robot internal constructor(
     private inner class Client : LinkClient {
         override fun onPacket(packet: Packet) {
             when (packet) {
-                is StateFull -> applyState(packet.state, StateUpdate.Kind.FULL)
+                is StateFull -> applyState(packet.state.toModel(), StateUpdate.Kind.FULL)
                 is StateReduced -> applyState(_state.value.merge(packet), StateUpdate.Kind.REDUCED)
                 is DebugText -> debugLog.robot(packet)
                 is IrReceived -> proximity.received(packet)
@@ -289,7 +301,7 @@ public class Robot internal constructor(
         lineSensor.update(state.line)
         motors.update(state.wheels)
         odometry.update(state.encoders, state.time.timeMs)
-        locomotion.watch(state.encoders, state.time.timeMs)
+        locomotion.watch(state.encoders, state.time.timeMs, atRest = state.wheels.speedLeftMmps == 0 && state.wheels.speedRightMmps == 0)
         if (kind == StateUpdate.Kind.FULL) {
             firstFullState.complete(Unit)
             locomotion.update(state.locomotion, state.time.timeMs)
@@ -323,15 +335,16 @@ public class Robot internal constructor(
     public suspend fun disconnect(queue: QueueOnLeave): Boolean {
         val said = if (link.isClosing) false else link.leave(queue)
         link.close(null)
-        withContext(kotlinx.coroutines.NonCancellable) { job.join() }
+        withContext(kotlinx.coroutines.NonCancellable) { lifetime.join() }
         return said
     }
 
     /**
      * Closes the link and ends the robot's coroutines without waiting for them (for `use {}`); idempotent, safe to
      * call from any thread. A live link first carries a goodbye (the robot finishes this host's movements), sent
-     * without waiting for the robot's answer: [disconnect] waits for it. Commands still waiting fail with
-     * [RobotClosedException].
+     * without waiting for the robot's answer: [disconnect] waits for it. The goodbye runs in the robot's scope, at
+     * most [RobotOptions.commandTimeout]: the scope that made the robot completes only after it. Commands still
+     * waiting fail with [RobotClosedException].
      */
     override fun close() {
         link.close(null, goodbye = true)

@@ -4,6 +4,7 @@ import kotlinx.coroutines.flow.Flow
 import kotlinx.coroutines.flow.distinctUntilChanged
 import kotlinx.coroutines.flow.map
 import org.pocketbot.protocol.FieldType
+import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.SettingsFieldInfo
 import org.pocketbot.protocol.UpdateSettings
 import org.pocketbot.sdk.internal.SettingsMirror
@@ -25,8 +26,11 @@ import org.pocketbot.sdk.internal.writeNumber
 public sealed class SettingField<T> constructor(
     private val link: LinkPort,
     private val mirror: SettingsMirror,
-    internal val info: SettingsFieldInfo,
+    path: String,
 ) {
+    // Looked up by name, not passed in: a sealed class's constructor shows in the API, and it names no wire type.
+    internal val info: SettingsFieldInfo = SETTINGS_FIELDS.firstOrNull { it.path == path } ?: error("the protocol has no setting $path")
+
     /** The setting's one name, e.g. `line_pid.kp`. */
     public val name: String get() = info.path
 
@@ -100,8 +104,8 @@ public sealed class SettingField<T> constructor(
 }
 
 /** A setting holding a real number (stored by the robot as binary32, so it reads back rounded to that). */
-public class DoubleSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
-    SettingField<Double>(link, mirror, info) {
+public class DoubleSetting internal constructor(link: LinkPort, mirror: SettingsMirror, path: String) :
+    SettingField<Double>(link, mirror, path) {
     init {
         require(info.type == FieldType.F32 && info.count == 1) { "${info.path} is not a real number" }
     }
@@ -113,8 +117,8 @@ public class DoubleSetting internal constructor(link: LinkPort, mirror: Settings
 }
 
 /** A setting holding an integer (u8, i8, u16, i16, i32). */
-public class IntSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
-    SettingField<Int>(link, mirror, info) {
+public class IntSetting internal constructor(link: LinkPort, mirror: SettingsMirror, path: String) :
+    SettingField<Int>(link, mirror, path) {
     init {
         require(info.type != FieldType.F32 && info.type != FieldType.CHAR && info.type != FieldType.U32 && info.count == 1) {
             "${info.path} is not an integer"
@@ -130,11 +134,11 @@ public class IntSetting internal constructor(link: LinkPort, mirror: SettingsMir
 public class EnumSetting<E : Enum<E>> internal constructor(
     link: LinkPort,
     mirror: SettingsMirror,
-    info: SettingsFieldInfo,
+    path: String,
     /** Every value the setting can hold. */
     public val values: List<E>,
     private val codeOf: (E) -> Int,
-) : SettingField<E>(link, mirror, info) {
+) : SettingField<E>(link, mirror, path) {
     init {
         require(info.type == FieldType.U8 && info.count == 1) { "${info.path} is not an enumeration" }
     }
@@ -165,8 +169,8 @@ public class EnumSetting<E : Enum<E>> internal constructor(
 }
 
 /** A setting holding a fixed number of integers (e.g. a calibration value per line sensor spot). */
-public class IntListSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
-    SettingField<List<Int>>(link, mirror, info) {
+public class IntListSetting internal constructor(link: LinkPort, mirror: SettingsMirror, path: String) :
+    SettingField<List<Int>>(link, mirror, path) {
     init {
         require(info.type != FieldType.F32 && info.type != FieldType.CHAR && info.count > 1) { "${info.path} is not an integer array" }
     }
@@ -191,8 +195,8 @@ public class IntListSetting internal constructor(link: LinkPort, mirror: Setting
 }
 
 /** A setting holding text (UTF-8, NUL-padded to its size). */
-public class TextSetting internal constructor(link: LinkPort, mirror: SettingsMirror, info: SettingsFieldInfo) :
-    SettingField<String>(link, mirror, info) {
+public class TextSetting internal constructor(link: LinkPort, mirror: SettingsMirror, path: String) :
+    SettingField<String>(link, mirror, path) {
     init {
         require(info.type == FieldType.CHAR) { "${info.path} is not text" }
     }

@@ -4,7 +4,6 @@ import kotlinx.coroutines.flow.StateFlow
 import org.pocketbot.protocol.LoadDefaults
 import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.SaveSettings
-import org.pocketbot.protocol.SettingsFieldInfo
 import org.pocketbot.protocol.UpdateSettings
 import org.pocketbot.sdk.internal.SettingsJson
 import org.pocketbot.sdk.internal.SettingsMirror
@@ -19,15 +18,13 @@ public abstract class SettingsBase internal constructor(internal val linkPort: L
 
     internal fun <F : SettingField<*>> register(f: F): F = f.also { byName[it.name] = it }
 
-    internal fun info(name: String): SettingsFieldInfo =
-        SETTINGS_FIELDS.firstOrNull { it.path == name } ?: error("the protocol has no setting $name")
 
-    internal fun double(name: String): DoubleSetting = register(DoubleSetting(linkPort, store, info(name)))
-    internal fun int(name: String): IntSetting = register(IntSetting(linkPort, store, info(name)))
-    internal fun ints(name: String): IntListSetting = register(IntListSetting(linkPort, store, info(name)))
-    internal fun text(name: String): TextSetting = register(TextSetting(linkPort, store, info(name)))
+    internal fun double(name: String): DoubleSetting = register(DoubleSetting(linkPort, store, name))
+    internal fun int(name: String): IntSetting = register(IntSetting(linkPort, store, name))
+    internal fun ints(name: String): IntListSetting = register(IntListSetting(linkPort, store, name))
+    internal fun text(name: String): TextSetting = register(TextSetting(linkPort, store, name))
     internal fun <E : Enum<E>> enum(name: String, values: List<E>, codeOf: (E) -> Int): EnumSetting<E> =
-        register(EnumSetting(linkPort, store, info(name), values, codeOf))
+        register(EnumSetting(linkPort, store, name, values, codeOf))
 
     /** Every setting, in struct order. */
     public val fields: List<SettingField<*>> get() = byName.values.sortedBy { it.info.offset }

@@ -1,18 +1,10 @@
 package org.pocketbot.sdk
 
-import org.pocketbot.protocol.Colour
-import org.pocketbot.protocol.DistanceClass
-import org.pocketbot.protocol.IrLed
-import org.pocketbot.protocol.LineFollowStatus
-import org.pocketbot.protocol.LocoMode
-import org.pocketbot.protocol.ProximitySide
-import org.pocketbot.protocol.RobotState
-import org.pocketbot.protocol.TrackStatus
 
 /**
  * One value of [RobotState] by its dotted name in the protocol (`wheels.speed_left_mmps`), for tools that print,
  * log or pick state values by name (the command line's `state --fields`, CSV logs). Enum values read as their
- * lower-case names, the line sensor's spots as a list.
+ * lower-case names, flags as the names of the bits set joined by `+` (`-` for none), the line sensor's spots as a list.
  */
 public class StateField internal constructor(
     public val name: String,
@@ -34,8 +26,8 @@ public class StateField internal constructor(
 public object StateFields {
     public val all: List<StateField> = buildList {
         fun f(name: String, width: Int, unit: String = "", read: (RobotState) -> Any) = add(StateField(name, unit, width, read))
-        fun side(prefix: String, pick: (RobotState) -> ProximitySide) {
-            f("$prefix.flags", U8) { pick(it).flags }
+        fun side(prefix: String, pick: (RobotState) -> RobotState.ProximitySide) {
+            f("$prefix.flags", flags(ProximityFlag.entries)) { flagsText(pick(it).flags) }
             f("$prefix.robot_id", U8) { pick(it).robotId }
             f("$prefix.robot_led", names(IrLed.entries)) { pick(it).robotLed.name.lowercase() }
             f("$prefix.distance", names(DistanceClass.entries)) { pick(it).distance.name.lowercase() }
@@ -52,7 +44,7 @@ public object StateFields {
         f("wheels.pwm_right", I16, "permille") { it.wheels.pwmRight }
         f("line.raw", LINE_SPOTS * (U16 + 1) - 1, "adc") { it.line.raw }
         f("line.position", I16, "permille") { it.line.position }
-        f("line.flags", U8) { it.line.flags }
+        f("line.flags", flags(LineFlag.entries)) { flagsText(it.line.flags) }
         f("line_follow.status", names(LineFollowStatus.entries)) { it.lineFollow.status.name.lowercase() }
         f("line_follow.segment", names(Colour.entries)) { it.lineFollow.segment.name.lowercase() }
         side("proximity.front") { it.proximity.front }
@@ -68,7 +60,7 @@ public object StateFields {
         f("power.battery_mv", U16, "mV") { it.power.batteryMv }
         f("power.current_ma", U16, "mA") { it.power.currentMa }
         f("power.mcu_temp_dc", I16, "0.1 degC") { it.power.mcuTempDc }
-        f("indicators.led", U8) { it.indicators.led }
+        f("indicators.led", flags(LedFlag.entries)) { flagsText(it.indicators.led) }
         f("indicators.ir_power", U8, "percent") { it.indicators.irPower }
         f("locomotion.mode", names(LocoMode.entries)) { it.locomotion.mode.name.lowercase() }
         f("locomotion.queue_length", U8) { it.locomotion.queueLength }
@@ -108,3 +100,8 @@ private const val I32 = 11
 private const val LINE_SPOTS = 8
 
 private fun names(entries: List<Enum<*>>): Int = entries.maxOf { it.name.length }
+
+// A flags field reads as its set bits' names joined by '+' (`seen+lost`), `-` when none is set.
+private fun flags(entries: List<Enum<*>>): Int = entries.sumOf { it.name.length + 1 } - 1
+
+private fun flagsText(set: Set<Enum<*>>): String = if (set.isEmpty()) "-" else set.joinToString("+") { it.name.lowercase() }

@@ -4,7 +4,6 @@ import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.time.Duration
 import kotlin.time.Duration.Companion.milliseconds

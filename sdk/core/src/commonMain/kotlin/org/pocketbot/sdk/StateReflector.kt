@@ -6,7 +6,6 @@ import kotlinx.coroutines.flow.asStateFlow
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.SetSync
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.internal.SettingsMirror
 import org.pocketbot.sdk.internal.link.LinkPort
 import kotlin.time.Duration

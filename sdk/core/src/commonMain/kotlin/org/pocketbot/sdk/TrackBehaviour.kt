@@ -3,10 +3,8 @@ package org.pocketbot.sdk
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
-import org.pocketbot.protocol.StateTrack
 import org.pocketbot.protocol.Track
 import org.pocketbot.protocol.TrackAction
-import org.pocketbot.protocol.TrackStatus
 import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.link.LinkPort
 
@@ -39,7 +37,7 @@ public class TrackBehaviour internal constructor(private val link: LinkPort, pri
     private val _state = MutableStateFlow(EMPTY_STATE.track)
 
     /** What the behaviour does, whether this robot holds the token, its visits and the robot met last (full state only). */
-    public val state: StateFlow<StateTrack> = _state.asStateFlow()
+    public val state: StateFlow<RobotState.Track> = _state.asStateFlow()
 
     /** What the behaviour is doing now ([TrackStatus.OFF] when it does not run). */
     public val status: TrackStatus get() = _state.value.status
@@ -76,7 +74,7 @@ public class TrackBehaviour internal constructor(private val link: LinkPort, pri
         settings.track.speedMps.set(speedMps)
     }
 
-    internal fun update(s: StateTrack) {
+    internal fun update(s: RobotState.Track) {
         _state.value = s
     }
 }

@@ -13,9 +13,21 @@ public class TrajectoryPoint(public val timeMs: Long, public val pose: Pose) {
     override fun toString(): String = "$timeMs ms: $pose"
 }
 
+/** A [Trajectory] as those who read it see it: its points and length, no way to add to it. */
+public interface ReadOnlyTrajectory {
+    /** The points so far, oldest first. */
+    public val points: StateFlow<List<TrajectoryPoint>>
+
+    /** Length of the path so far, in metres (of the points kept). */
+    public val lengthM: Double
+
+    /** The points as CSV: `time_ms,x_m,y_m,heading_rad`, one line per point after a header. */
+    public fun toCsv(): String
+}
+
 /**
- * A path as a list of timed poses, for drawing and export: [Odometry.trajectory] records a robot's dead-reckoned
- * path; a face may keep another one (the emulator's ground truth, say) and [add] to it.
+ * A path as a list of timed poses, for drawing and export: [Odometry.trajectory] is a robot's dead-reckoned path
+ * (read-only: odometry records it); a face may keep another one (the emulator's ground truth, say) and [add] to it.
  *
  * A point is kept when the robot moved at least [minStepM] or turned at least [minTurnRad] since the last kept one,
  * so a robot standing still adds nothing. When [capacity] points are kept, every second point is dropped (the path
@@ -26,7 +38,7 @@ public class Trajectory(
     public val capacity: Int = 20_000,
     public val minStepM: Double = 0.001,
     public val minTurnRad: Double = 0.02,
-) {
+) : ReadOnlyTrajectory {
     init {
         require(capacity >= 2) { "capacity must be at least 2" }
     }
@@ -38,11 +50,9 @@ public class Trajectory(
     private var length = 0.0
     private val _points = MutableStateFlow<List<TrajectoryPoint>>(emptyList())
 
-    /** The points so far, oldest first. */
-    public val points: StateFlow<List<TrajectoryPoint>> = _points.asStateFlow()
+    override val points: StateFlow<List<TrajectoryPoint>> = _points.asStateFlow()
 
-    /** Length of the path so far, in metres (of the points kept). */
-    public val lengthM: Double get() = length
+    override val lengthM: Double get() = length
 
     /** Adds the pose at robot time [timeMs], unless the robot has not moved enough since the last point. */
     public fun add(timeMs: Long, pose: Pose): Unit = synchronized(lock) { append(TrajectoryPoint(timeMs, pose)) }
@@ -55,8 +65,7 @@ public class Trajectory(
         _points.value = emptyList()
     }
 
-    /** The points as CSV: `time_ms,x_m,y_m,heading_rad`, one line per point after a header. */
-    public fun toCsv(): String = buildString {
+    override fun toCsv(): String = buildString {
         append("time_ms,x_m,y_m,heading_rad\n")
         for (p in _points.value) append("${p.timeMs},${p.pose.xM},${p.pose.yM},${p.pose.headingRad}\n")
     }
@@ -65,7 +74,7 @@ public class Trajectory(
         val last = if (size > 0) array[size - 1] else null
         if (last != null) {
             val step = last.pose.distanceTo(p.pose)
-            if (step < minStepM && kotlin.math.abs(p.pose.headingRad - last.pose.headingRad) < minTurnRad) return
+            if (step < minStepM && kotlin.math.abs(wrapAngle(p.pose.headingRad - last.pose.headingRad)) < minTurnRad) return
             length += step
         }
         if (size == capacity) halve()

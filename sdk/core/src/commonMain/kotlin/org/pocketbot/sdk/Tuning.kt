@@ -10,8 +10,6 @@ import kotlinx.coroutines.flow.map
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.yield
 import org.pocketbot.protocol.PACKET_SPECS
-import org.pocketbot.protocol.RobotState
-import org.pocketbot.protocol.SyncMode
 import kotlin.math.abs
 import kotlin.math.sqrt
 import kotlin.time.Duration

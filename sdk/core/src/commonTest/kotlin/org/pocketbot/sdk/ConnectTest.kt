@@ -1,16 +1,23 @@
 package org.pocketbot.sdk
 
+import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Job
+import kotlinx.coroutines.coroutineScope
+import kotlinx.coroutines.delay
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.plus
+import kotlinx.coroutines.test.currentTime
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.ReadSettings
 import org.pocketbot.protocol.SetSync
-import org.pocketbot.protocol.SyncMode
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
 import kotlin.test.assertIs
 import kotlin.test.assertTrue
+import kotlin.time.Duration.Companion.seconds
 
 class ConnectTest {
     @Test
@@ -60,16 +67,43 @@ class ConnectTest {
     }
 
     @Test
-    fun theRobotsWorkRunsOffTheCallersThreadAndEndsWithTheCallersScope() = runTest {
+    fun theScopeThatMadeARobotWaitsForItsClose() = runTest {
         val peer = ScriptedRobot()
         lateinit var robot: Robot
-        // A scope that ends: the robot bound to it closes with it, and does not keep it from ending.
-        kotlinx.coroutines.coroutineScope {
+        val closeAt = 5.seconds
+        // The robot is a child of the scope: the scope returns only after the robot closed, and nothing is left.
+        coroutineScope {
             robot = peer.device.connect(this + runtime(), testOptions())
-            assertEquals(ConnectionState.Connected, robot.connection.value)
+            launch {
+                delay(closeAt)
+                assertEquals(ConnectionState.Connected, robot.connection.value)
+                robot.close()
+            }
         }
+        assertTrue(currentTime >= closeAt.inWholeMilliseconds, "the scope returned at $currentTime ms, before the close")
         assertIs<ConnectionState.Closed>(robot.connection.value)
         assertTrue(!peer.connected)
+    }
+
+    @Test
+    fun cancellingTheScopeClosesTheRobot() = runTest {
+        val peer = ScriptedRobot()
+        val connected = CompletableDeferred<Robot>()
+        val scope = launch { connected.complete(peer.device.connect(this + runtime(), testOptions())) }
+        val robot = connected.await()
+        scope.cancel()
+        scope.join()
+        val closed = assertIs<ConnectionState.Closed>(robot.connection.value)
+        assertTrue("scope" in closed.cause?.message.orEmpty(), "closed because: ${closed.cause}")
+        assertTrue(!peer.connected)
+        assertFailsWith<RobotClosedException> { robot.locomotion.enqueue(Movement.Straight(0.05, 0.1)) }
+    }
+
+    @Test
+    fun connectingInAScopeThatEndedSaysSo() = runTest {
+        val ended = CoroutineScope(Job().apply { cancel() } + runtime())
+        val e = assertFailsWith<IllegalStateException> { ScriptedRobot().device.connect(ended, testOptions()) }
+        assertTrue("scope has ended" in e.message!!, e.message)
     }
 
     @Test

@@ -18,7 +18,6 @@ import org.pocketbot.protocol.SetSync
 import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.Stop
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.protocol.UpdateSettings
 import kotlin.math.PI
 import kotlin.test.Test
@@ -35,7 +34,7 @@ class DrivingTest {
     @Test
     fun aHostThatAsksToDriveAFreeRobotDrivesIt() = runTest {
         val peer = ScriptedRobot()
-        val robot = connect(peer, testOptions().copy(hostLabel = "test@host"))
+        val robot = connect(peer, RobotOptions(testOptions()) { hostLabel = "test@host" })
         assertEquals(Driving(true, "test@host", DriverChange.CLAIMED), robot.driving.value)
         assertEquals(SetRole(HostRole.DRIVE.code, "test@host"), peer.received.map { it.second }.filterIsInstance<SetRole>().single())
         robot.close()
@@ -64,7 +63,7 @@ class DrivingTest {
     @Test
     fun takingOverDrivesAndAReconnectAsksToDriveNotToTakeOverAgain() = runTest {
         val peer = ScriptedRobot().apply { otherDriver = "panel@lab-pc" }
-        val robot = connect(peer, testOptions().copy(hostLabel = "cli@lab-pc"))
+        val robot = connect(peer, RobotOptions(testOptions()) { hostLabel = "cli@lab-pc" })
         val events = async { robot.events.first() }
         runCurrent()
         val now = robot.takeOver()
@@ -190,7 +189,7 @@ class DrivingTest {
         val peer = ScriptedRobot()
         peer.answersHello = false
         val opening = async {
-            assertFailsWith<ConnectFailedException> { connect(peer, testOptions().copy(helloAttempts = 1)) }
+            assertFailsWith<ConnectFailedException> { connect(peer, RobotOptions(testOptions()) { helloAttempts = 1 }) }
         }
         runCurrent()
         peer.send(org.pocketbot.protocol.Error(org.pocketbot.protocol.ErrorCode.NO_FREE_LINK.code, 0, 0, 3))

@@ -8,8 +8,6 @@ import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.StateReduced
 import org.pocketbot.protocol.StateTime
-import org.pocketbot.protocol.SyncMode
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertNotNull
@@ -19,7 +17,7 @@ import kotlin.time.Duration.Companion.milliseconds
 
 /** Robot.freshness says which values of the state are live, and why and since when the others are not. */
 class FreshnessTest {
-    private fun ScriptedRobot.stateAt(ms: Long) = sendState(EMPTY_STATE.with(time = StateTime(ms, 0, 0, 0)))
+    private fun ScriptedRobot.stateAt(ms: Long) = sendState(WIRE_EMPTY.with(time = StateTime(ms, 0, 0, 0)))
 
     @Test
     fun valuesAreLiveWhileStatesComeAndStaleWithTheirAgeOnceTheRobotFallsSilentOrTheLinkGoes() = runTest {

@@ -12,7 +12,6 @@ import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.MoveStraight
 import org.pocketbot.protocol.SetSync
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.protocol.UpdateSettings
 import kotlin.test.Test
 import kotlin.test.assertEquals
@@ -180,7 +179,7 @@ class LinkLossTest {
     @Test
     fun givingUpClosesTheRobotAndFailsWaitingCommands() = runTest {
         val peer = ScriptedRobot()
-        val robot = connect(peer, testOptions(reconnect = ReconnectPolicy(10.milliseconds, 20.milliseconds, maxAttempts = 3)))
+        val robot = connect(peer, testOptions(reconnect = ReconnectPolicy { initialDelay = 10.milliseconds; maxDelay = 20.milliseconds; maxAttempts = 3 }))
         peer.refuseOpens = 100
         peer.disconnect()
         val pending = async { runCatching { robot.settings.linePid.kp.set(2.0) } }

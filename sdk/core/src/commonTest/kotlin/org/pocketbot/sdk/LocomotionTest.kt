@@ -7,7 +7,6 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.test.advanceTimeBy
 import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
-import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
@@ -83,7 +82,7 @@ class LocomotionTest {
     @Test
     fun aLostLastReportIsRecoveredFromTheLogOnceTheRobotStandsIdle() = runTest {
         val peer = ScriptedRobot()
-        val robot = connect(peer, testOptions(syncMode = org.pocketbot.protocol.SyncMode.FULL))
+        val robot = connect(peer, testOptions(syncMode = SyncMode.FULL))
         val a = robot.locomotion.enqueue(Movement.Straight(0.1, 0.2))
         peer.finishMovement(announce = false, done = 0.1f)
         // The robot keeps sending state: idle, queue empty.
@@ -99,7 +98,7 @@ class LocomotionTest {
     fun aReportGarbledOnTheWayIsRecoveredFromTheLogWithoutFullState() = runTest {
         val peer = ScriptedRobot()
         // Reduced state carries no locomotion: only the log can tell that the movement ended.
-        val robot = connect(peer, testOptions(syncMode = org.pocketbot.protocol.SyncMode.REDUCED))
+        val robot = connect(peer, testOptions(syncMode = SyncMode.REDUCED))
         val a = robot.locomotion.enqueue(Movement.Straight(0.1, 0.2))
         peer.garbleOutgoingIf = { it is MovementDone }
         peer.finishMovement(announce = true, done = 0.0995f)

@@ -1,10 +1,10 @@
 package org.pocketbot.sdk
 
 import kotlinx.coroutines.flow.first
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.protocol.StateTime
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import kotlin.math.PI
 import kotlin.math.abs
 import kotlin.test.Test
@@ -13,7 +13,7 @@ import kotlin.test.assertTrue
 
 class OdometryTest {
     private var t = 0L
-    private fun ScriptedRobot.encoders(left: Int, right: Int) = sendState(EMPTY_STATE.with(time = StateTime(++t, 0, 0, 0), encoders = StateEncoders(left, right)))
+    private fun ScriptedRobot.encoders(left: Int, right: Int) = sendState(WIRE_EMPTY.with(time = StateTime(++t, 0, 0, 0), encoders = StateEncoders(left, right)))
 
     // Defaults: wheel 9 mm, base 26 mm, 40 pulses per revolution, as float32 (as the robot holds them).
     private val diameter = Float.fromBits(0.009f.toRawBits()).toDouble()
@@ -67,6 +67,32 @@ class OdometryTest {
         repeat(steps) { l += 7; r -= 7; peer.encoders(l, r) }
         robot.state.first { it.time.timeMs == t }
         assertEquals(0.0, robot.odometry.pose.value.headingRad, "heading after returning to the start counts")
+        robot.close()
+    }
+
+    @Test
+    fun headingIsWrappedToMinusPiPi() = runTest {
+        val peer = ScriptedRobot()
+        val robot = connect(peer)
+        peer.encoders(0, 0)
+        // Left on the spot, one pulse per wheel per state, through one and a quarter turns: the pose reads -pi..pi
+        // at every step, as the emulator's ground truth does; the position never jumps where the heading wraps.
+        val pulsesPerTurn = (2 * PI * base / perPulse / 2).toInt()
+        val headings = mutableListOf<Double>()
+        val collector = backgroundScope.launch { robot.odometry.pose.collect { headings += it.headingRad } }
+        var n = 0
+        repeat(pulsesPerTurn * 5 / 4) {
+            n++
+            peer.encoders(-n, n)
+            robot.state.first { it.time.timeMs == t }
+            kotlinx.coroutines.yield()
+        }
+        collector.cancel()
+        assertTrue(headings.all { it > -PI - 1e-12 && it <= PI + 1e-12 }, "headings out of -pi..pi: ${headings.filter { abs(it) > PI }}")
+        assertTrue(headings.any { it < -PI / 2 }, "a turn past pi reads negative")
+        val expected = perPulse / base * 2 * n - 2 * PI
+        assertEquals(expected, robot.odometry.pose.value.headingRad, 1e-9)
+        assertTrue(robot.odometry.pose.value.distanceTo(Pose.ORIGIN) < 1e-9, "a turn in place does not move the robot")
         robot.close()
     }
 

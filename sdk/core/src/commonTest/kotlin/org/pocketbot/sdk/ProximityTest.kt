@@ -8,15 +8,13 @@ import kotlinx.coroutines.flow.take
 import kotlinx.coroutines.flow.toList
 import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
-import org.pocketbot.protocol.DistanceClass
-import org.pocketbot.protocol.IrLed
+import org.pocketbot.protocol.DistanceClass as WireDistance
+import org.pocketbot.protocol.IrLed as WireLed
 import org.pocketbot.protocol.IrReceived
 import org.pocketbot.protocol.IrSend
 import org.pocketbot.protocol.ProximitySide
-import org.pocketbot.protocol.Side
 import org.pocketbot.protocol.StateProximity
 import org.pocketbot.protocol.StateTime
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import kotlin.test.Test
 import kotlin.test.assertContentEquals
 import kotlin.test.assertEquals
@@ -28,11 +26,11 @@ class ProximityTest {
         val robot = connect(peer)
         val got = async { robot.proximity.encounters.take(2).toList() }
         runCurrent()
-        val nobody = ProximitySide(0, 0, IrLed.FRONT, DistanceClass.NONE)
-        fun state(t: Long, front: ProximitySide) = EMPTY_STATE.with(time = StateTime(t, 0, 0, 0), proximity = StateProximity(front, nobody))
-        peer.sendState(state(1, ProximitySide(2, 3, IrLed.REAR, DistanceClass.FAR)))
-        peer.sendState(state(2, ProximitySide(2, 3, IrLed.REAR, DistanceClass.FAR))) // unchanged
-        peer.sendState(state(3, ProximitySide(3, 3, IrLed.REAR, DistanceClass.NEAR))) // closer, obstacle too
+        val nobody = ProximitySide(0, 0, WireLed.FRONT, WireDistance.NONE)
+        fun state(t: Long, front: ProximitySide) = WIRE_EMPTY.with(time = StateTime(t, 0, 0, 0), proximity = StateProximity(front, nobody))
+        peer.sendState(state(1, ProximitySide(2, 3, WireLed.REAR, WireDistance.FAR)))
+        peer.sendState(state(2, ProximitySide(2, 3, WireLed.REAR, WireDistance.FAR))) // unchanged
+        peer.sendState(state(3, ProximitySide(3, 3, WireLed.REAR, WireDistance.NEAR))) // closer, obstacle too
         val encounters = got.await()
         assertEquals(Encounter(3, Side.FRONT, IrLed.REAR, DistanceClass.FAR, 1), encounters[0])
         assertEquals(Encounter(3, Side.FRONT, IrLed.REAR, DistanceClass.NEAR, 3), encounters[1])

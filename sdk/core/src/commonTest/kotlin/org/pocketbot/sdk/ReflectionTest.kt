@@ -13,8 +13,6 @@ import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.protocol.StateFull
 import org.pocketbot.protocol.StateReduced
 import org.pocketbot.protocol.StateTime
-import org.pocketbot.protocol.SyncMode
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertTrue
@@ -26,10 +24,10 @@ class ReflectionTest {
     fun fullStateIsVisibleWithItsRobotTime() = runTest {
         val peer = ScriptedRobot()
         val robot = connect(peer)
-        val s = EMPTY_STATE.with(time = StateTime(1234, 0, 0, 0), encoders = StateEncoders(10, 20))
+        val s = WIRE_EMPTY.with(time = StateTime(1234, 0, 0, 0), encoders = StateEncoders(10, 20))
         peer.sendState(s)
         val seen = robot.state.first { it.time.timeMs == 1234L }
-        assertEquals(StateEncoders(10, 20), seen.encoders)
+        assertEquals(StateEncoders(10, 20).toModel(), seen.encoders)
         assertEquals(1, robot.linkStats.value.fullStates)
         robot.close()
     }
@@ -38,12 +36,12 @@ class ReflectionTest {
     fun reducedStateUpdatesOnlyItsPart() = runTest {
         val peer = ScriptedRobot()
         val robot = connect(peer)
-        val full = EMPTY_STATE.with(time = StateTime(100, 0, 0, 0), power = org.pocketbot.protocol.StatePower(3700, 0, 0))
+        val full = WIRE_EMPTY.with(time = StateTime(100, 0, 0, 0), power = org.pocketbot.protocol.StatePower(3700, 0, 0))
         peer.sendState(full)
         robot.state.first { it.time.timeMs == 100L }
         peer.sendReduced(StateReduced(105, 3, 4, 50, 60, -200, 1))
         val merged = robot.state.first { it.time.timeMs == 105L }
-        assertEquals(StateEncoders(3, 4), merged.encoders)
+        assertEquals(StateEncoders(3, 4).toModel(), merged.encoders)
         assertEquals(50, merged.wheels.speedLeftMmps)
         assertEquals(-200, merged.line.position)
         assertEquals(3700, merged.power.batteryMv, "a reduced packet must keep the rest of the state")
@@ -59,8 +57,8 @@ class ReflectionTest {
         val kinds = mutableListOf<StateUpdate.Kind>()
         val job = launch { robot.stateUpdates.collect { kinds += it.kind } }
         runCurrent()
-        peer.sendState(EMPTY_STATE.with(time = StateTime(1, 0, 0, 0)))
-        peer.sendState(EMPTY_STATE.with(time = StateTime(1, 0, 0, 0))) // identical: a StateFlow would drop it
+        peer.sendState(WIRE_EMPTY.with(time = StateTime(1, 0, 0, 0)))
+        peer.sendState(WIRE_EMPTY.with(time = StateTime(1, 0, 0, 0))) // identical: a StateFlow would drop it
         peer.sendReduced(StateReduced(2, 0, 0, 0, 0, 0, 0))
         robot.state.first { it.time.timeMs == 2L }
         runCurrent()
@@ -73,12 +71,12 @@ class ReflectionTest {
     fun corruptTruncatedAndUnknownFramesAreCountedAndNeverApplied() = runTest {
         val peer = ScriptedRobot()
         val robot = connect(peer)
-        val good = Frames.encode(StateFull(EMPTY_STATE.with(time = StateTime(77, 0, 0, 0))), 0)
+        val good = Frames.encode(StateFull(WIRE_EMPTY.with(time = StateTime(77, 0, 0, 0))), 0)
         peer.sendRaw(good.copyOf().also { it[10] = (it[10] + 1).toByte() })         // bit error
         peer.sendRaw(good.copyOf(good.size - 7))                                      // truncated
         peer.sendRaw(byteArrayOf(0x7F, 0, 0) + crcOf(byteArrayOf(0x7F, 0, 0)))          // unknown type
         peer.sendRaw(byteArrayOf(1))                                                    // too short
-        peer.sendState(EMPTY_STATE.with(time = StateTime(78, 0, 0, 0)))
+        peer.sendState(WIRE_EMPTY.with(time = StateTime(78, 0, 0, 0)))
         robot.state.first { it.time.timeMs == 78L }
         val stats = robot.linkStats.value
         assertEquals(1, stats.badCrc)

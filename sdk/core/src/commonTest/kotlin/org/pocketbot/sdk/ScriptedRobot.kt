@@ -3,43 +3,42 @@ package org.pocketbot.sdk
 import kotlinx.coroutines.channels.Channel
 import kotlinx.coroutines.channels.ReceiveChannel
 import org.pocketbot.protocol.Ack
+import org.pocketbot.protocol.Crc16
+import org.pocketbot.protocol.Driver
+import org.pocketbot.protocol.DriverChange
 import org.pocketbot.protocol.Error
 import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.FieldType
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
+import org.pocketbot.protocol.Goodbye
 import org.pocketbot.protocol.Hello
 import org.pocketbot.protocol.HelloRequest
+import org.pocketbot.protocol.HostRole
 import org.pocketbot.protocol.LoadDefaults
 import org.pocketbot.protocol.MoveArc
 import org.pocketbot.protocol.MoveRotate
 import org.pocketbot.protocol.MoveStraight
-import org.pocketbot.protocol.Crc16
-import org.pocketbot.protocol.Driver
-import org.pocketbot.protocol.DriverChange
-import org.pocketbot.protocol.Goodbye
-import org.pocketbot.protocol.HostRole
-import org.pocketbot.protocol.SetRole
 import org.pocketbot.protocol.MovementDone
 import org.pocketbot.protocol.MovementLog
 import org.pocketbot.protocol.MovementOutcome
-import org.pocketbot.protocol.ReadMovements
-import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.Packet
 import org.pocketbot.protocol.ProtocolInfo
+import org.pocketbot.protocol.ReadMovements
 import org.pocketbot.protocol.ReadSettings
 import org.pocketbot.protocol.RobotState
 import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.SaveSettings
+import org.pocketbot.protocol.SetRole
 import org.pocketbot.protocol.SetSync
 import org.pocketbot.protocol.SettingsData
 import org.pocketbot.protocol.StateFull
+import org.pocketbot.protocol.StateLocomotion
 import org.pocketbot.protocol.StateReduced
 import org.pocketbot.protocol.Stop
 import org.pocketbot.protocol.UpdateSettings
 import org.pocketbot.sdk.internal.DEFAULT_SETTINGS_BYTES
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import org.pocketbot.sdk.internal.readNumber
 import org.pocketbot.sdk.transport.LinkRate
 import org.pocketbot.sdk.transport.RobotDevice
@@ -68,7 +67,7 @@ class ScriptedRobot(
         val f = SETTINGS_FIELDS.single { it.path == name }
         org.pocketbot.sdk.internal.writeNumber(settings, f.offset, f.type, value, name)
     }
-    var state: RobotState = EMPTY_STATE
+    var state: RobotState = WIRE_EMPTY
 
     /** Every valid frame the host sent, in order: (seq, packet). */
     val received = mutableListOf<Pair<Int, Packet>>()
@@ -238,7 +237,7 @@ class ScriptedRobot(
         otherDriver = null
         session = 0
         finishedId = 0
-        state = EMPTY_STATE
+        state = WIRE_EMPTY
         send(hello(resumed = false))
     }
 

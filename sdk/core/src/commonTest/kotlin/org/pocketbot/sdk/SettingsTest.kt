@@ -6,13 +6,11 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.test.advanceTimeBy
 import kotlinx.coroutines.test.runCurrent
 import kotlinx.coroutines.test.runTest
-import org.pocketbot.protocol.ErrorCode
 import org.pocketbot.protocol.LoadDefaults
 import org.pocketbot.protocol.ReadSettings
 import org.pocketbot.protocol.SETTINGS_FIELDS
 import org.pocketbot.protocol.SaveSettings
 import org.pocketbot.protocol.SetSync
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.protocol.UpdateSettings
 import kotlin.test.Test
 import kotlin.test.assertContentEquals

@@ -7,7 +7,6 @@ import kotlinx.coroutines.plus
 import kotlinx.coroutines.test.TestScope
 import kotlin.coroutines.ContinuationInterceptor
 import kotlin.random.Random
-import org.pocketbot.protocol.SyncMode
 import kotlin.time.Duration.Companion.milliseconds
 
 /** Options for scripted robots: a private cache, no state packets unless a test asks (no silence watchdog). */
@@ -15,8 +14,13 @@ fun testOptions(
     syncMode: SyncMode = SyncMode.NONE,
     cache: SettingsCache? = InMemorySettingsCache(),
     commandRetries: Int = 8,
-    reconnect: ReconnectPolicy = ReconnectPolicy(initialDelay = 10.milliseconds, maxDelay = 100.milliseconds),
-): RobotOptions = RobotOptions(syncMode = syncMode, settingsCache = cache, commandRetries = commandRetries, reconnect = reconnect)
+    reconnect: ReconnectPolicy = ReconnectPolicy { initialDelay = 10.milliseconds; maxDelay = 100.milliseconds },
+): RobotOptions = RobotOptions {
+    this.syncMode = syncMode
+    settingsCache = cache
+    this.commandRetries = commandRetries
+    this.reconnect = reconnect
+}
 
 /** The test's own virtual-time scheduler, as the runtime of the SDK's work: tests run on simulated time. */
 fun TestScope.runtime(): RobotRuntime = RobotRuntime(coroutineContext[ContinuationInterceptor] as CoroutineDispatcher, Random(42))
@@ -39,6 +43,10 @@ fun assertSamePacket(expected: org.pocketbot.protocol.Packet, actual: org.pocket
 
 /** The offset of the setting [name] in the settings struct, from the protocol definition. */
 fun offsetOf(name: String): Int = org.pocketbot.protocol.SETTINGS_FIELDS.single { it.path == name }.offset
+
+/** The wire state a scripted robot starts from: all zero, robot time 0. */
+val WIRE_EMPTY: org.pocketbot.protocol.RobotState =
+    org.pocketbot.protocol.RobotState.decode(ByteArray(org.pocketbot.protocol.ProtocolInfo.STATE_SIZE), 0)
 
 /** [this] state with some groups replaced (state classes have no copy: fields may be added). */
 fun org.pocketbot.protocol.RobotState.with(

@@ -4,7 +4,6 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.test.runTest
 import org.pocketbot.protocol.StateEncoders
 import org.pocketbot.protocol.StateTime
-import org.pocketbot.sdk.internal.EMPTY_STATE
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertTrue
@@ -51,12 +50,12 @@ class TrajectoryTest {
         val peer = ScriptedRobot()
         val robot = connect(peer)
         var time = 0L
-        for (left in listOf(0, 0, 40, 80, 120)) peer.sendState(EMPTY_STATE.with(time = StateTime(time++, 0, 0, 0), encoders = StateEncoders(left, left)))
+        for (left in listOf(0, 0, 40, 80, 120)) peer.sendState(WIRE_EMPTY.with(time = StateTime(time++, 0, 0, 0), encoders = StateEncoders(left, left)))
         robot.state.first { it.time.timeMs == time - 1 }
         val points = robot.odometry.trajectory.points.value
         assertEquals(listOf(0L, 2L, 3L, 4L), points.map { it.timeMs }, "the first state is the start; standing still adds nothing")
         assertEquals(robot.odometry.pose.value, points.last().pose)
-        robot.odometry.trajectory.clear()
+        robot.odometry.clearTrajectory()
         assertTrue(robot.odometry.trajectory.points.value.isEmpty())
         robot.close()
     }

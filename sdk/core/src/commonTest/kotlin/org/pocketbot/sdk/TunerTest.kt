@@ -1,7 +1,6 @@
 package org.pocketbot.sdk
 
 import kotlinx.coroutines.test.runTest
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.transport.LinkRate
 import kotlin.test.Test
 import kotlin.test.assertEquals

@@ -112,7 +112,7 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
             emu.close()
             throw CliktError("cannot listen on ${ListenAddress.hostText(listen)}: ${e.message}")
         }
-        println("PocketBot emulator: world ${w.name}, $robots robot(s), seed $seed, speed ${describe(pace)}${if (hci) ", link hci" else ""}$where")
+        println("PocketBot emulator: world ${w.name}, $robots robot(s), seed $seed, speed ${describe(pace)}${if (hci) ", link hci" else ""}, firmware ${emu.firmwareEngine.name.lowercase()}$where")
         lines.forEach(::println)
         if (control >= 0) println("control $host:$control")
         System.out.flush()

@@ -12,7 +12,7 @@ import kotlin.time.Duration
  * a lost link and [close] are [ByteStreamTransport]'s behaviour. Safe to use from any thread and coroutine.
  *
  * ```
- * val transport = FramedTcpTransport.connect("127.0.0.1", l2capPort)
+ * val transport = FramedTcpTransport.open("127.0.0.1", l2capPort)
  * transport.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, session), seq = 1))
  * println(Frames.decode(transport.incoming.receive()))
  * transport.close()
@@ -31,14 +31,23 @@ public class FramedTcpTransport private constructor(
          * @param context where the transport's reader runs; its [kotlinx.coroutines.Job], if any, becomes the
          *   parent of the reader.
          */
-        public suspend fun connect(
+        public suspend fun open(
             host: String,
             port: Int,
             timeout: Duration = TcpTransport.DEFAULT_CONNECT_TIMEOUT,
             context: CoroutineContext = Dispatchers.Unconfined,
         ): FramedTcpTransport = connect(host, port, timeout, context, SocketLoop.next())
 
-        /** [connect] with its socket served by [loop]. */
+        /** The old name of [open]. */
+        @Deprecated("open, the verb SerialTransport.open and RobotDevice.open use", ReplaceWith("open(host, port, timeout, context)"))
+        public suspend fun connect(
+            host: String,
+            port: Int,
+            timeout: Duration = TcpTransport.DEFAULT_CONNECT_TIMEOUT,
+            context: CoroutineContext = Dispatchers.Unconfined,
+        ): FramedTcpTransport = open(host, port, timeout, context)
+
+        /** [open] with its socket served by [loop]. */
         internal suspend fun connect(
             host: String,
             port: Int,

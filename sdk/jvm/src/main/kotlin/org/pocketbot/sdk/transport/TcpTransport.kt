@@ -25,7 +25,7 @@ import kotlin.time.Duration.Companion.seconds
  * thread and coroutine.
  *
  * ```
- * val transport = TcpTransport.connect("127.0.0.1", 40001)
+ * val transport = TcpTransport.open("127.0.0.1", 40001)
  * transport.send(Frames.encode(HelloRequest(ProtocolInfo.VERSION, session), seq = 0))
  * println(Frames.decode(transport.incoming.receive()))
  * transport.close()
@@ -37,7 +37,7 @@ public class TcpTransport private constructor(
     context: CoroutineContext,
 ) : SlipStreamTransport(address, stream, context) {
     public companion object {
-        /** How long [connect] waits by default for the robot to accept the connection. */
+        /** How long [open] waits by default for the robot to accept the connection. */
         public val DEFAULT_CONNECT_TIMEOUT: Duration = 5.seconds
 
         /**
@@ -47,14 +47,23 @@ public class TcpTransport private constructor(
          * @param context where the transport's reader runs; its [kotlinx.coroutines.Job], if any, becomes the
          *   parent of the reader.
          */
-        public suspend fun connect(
+        public suspend fun open(
             host: String,
             port: Int,
             timeout: Duration = DEFAULT_CONNECT_TIMEOUT,
             context: CoroutineContext = Dispatchers.Unconfined,
         ): TcpTransport = connect(host, port, timeout, context, SocketLoop.next())
 
-        /** [connect] with its socket served by [loop]. */
+        /** The old name of [open]. */
+        @Deprecated("open, the verb SerialTransport.open and RobotDevice.open use", ReplaceWith("open(host, port, timeout, context)"))
+        public suspend fun connect(
+            host: String,
+            port: Int,
+            timeout: Duration = DEFAULT_CONNECT_TIMEOUT,
+            context: CoroutineContext = Dispatchers.Unconfined,
+        ): TcpTransport = open(host, port, timeout, context)
+
+        /** [open] with its socket served by [loop]. */
         internal suspend fun connect(
             host: String,
             port: Int,
@@ -86,12 +95,18 @@ public class TcpTransport private constructor(
             } catch (e: CancellationException) {
                 channel.close()
                 throw e
+            } catch (e: java.net.ConnectException) {
+                channel.close()
+                throw TransportLostException("$address: nothing listens there (connection refused): $NOT_LISTENING", e)
             } catch (e: Exception) {
                 channel.close()
                 throw TransportLostException("$address: ${e.message?.lowercase() ?: e::class.simpleName}", e)
             }
             return SocketStream(channel, loop)
         }
+
+        /** What a refused connection most likely means. */
+        internal const val NOT_LISTENING = "is the emulator (make emulator, pocketbot emulator) or the robot's TCP bridge running?"
 
         internal fun tcpAddress(host: String, port: Int): String =
             if (':' in host) "tcp://[$host]:$port" else "tcp://$host:$port"

@@ -20,13 +20,13 @@ import org.pocketbot.emulator.Speed
 import org.pocketbot.emulator.WheelDistances
 import org.pocketbot.emulator.bluetooth.VirtualBluetooth
 import org.pocketbot.emulator.firmware.FirmwareImage
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
 import org.pocketbot.sdk.MovementResult
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.StateUpdate
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.connect
 import org.pocketbot.sdk.it.itOptions
 import org.pocketbot.sdk.it.valueIn

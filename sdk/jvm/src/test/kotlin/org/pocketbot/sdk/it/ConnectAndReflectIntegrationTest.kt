@@ -15,9 +15,9 @@ import kotlinx.coroutines.flow.toList
 import kotlinx.coroutines.launch
 import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.link.LinkSettings
-import org.pocketbot.protocol.ErrorCode
+import org.pocketbot.sdk.ErrorCode
 import org.pocketbot.protocol.ProtocolInfo
-import org.pocketbot.protocol.SyncMode
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.SettingRefusedException
 import org.pocketbot.sdk.StateUpdate
@@ -43,7 +43,7 @@ class ConnectAndReflectIntegrationTest {
 
     @Test
     fun reportedStateWaitsForTheFirstFullStateAndFailsWhenTheRobotCloses() = withEmulator { emu ->
-        val silent = RobotOptions(syncMode = SyncMode.NONE, settingsCache = InMemorySettingsCache())
+        val silent = RobotOptions { syncMode = SyncMode.NONE; settingsCache = InMemorySettingsCache() }
         val robot = connectAll(emu, silent).single()
         assertNull(withTimeoutOrNull(1.seconds) { robot.reportedState() }, "no state was sent, so none is reported")
         assertEquals(0, robot.state.value.power.batteryMv, "the mirror is all zero before the first state")
@@ -76,7 +76,7 @@ class ConnectAndReflectIntegrationTest {
         assertTrue(reduced.zipWithNext().all { (a, b) -> b.timeMs > a.timeMs })
         assertTrue(robot.linkStats.value.reducedStates >= 20)
         assertEquals(0, robot.linkStats.value.dropped)
-        assertEquals(SyncMode.REDUCED.code, valueIn(emu.handleOf(robot).settingsBytes(), "sync.mode"), "settings.sync.mode on the robot")
+        assertEquals(org.pocketbot.protocol.SyncMode.REDUCED.code, valueIn(emu.handleOf(robot).settingsBytes(), "sync.mode"), "settings.sync.mode on the robot")
         robot.close()
     }
 
@@ -142,10 +142,10 @@ class ConnectAndReflectIntegrationTest {
         val cache = org.pocketbot.sdk.InMemorySettingsCache()
         val device = emu.discoverer().discover().first()
         val t0 = emu.time
-        device.connect(this, itOptions().copy(settingsCache = cache)).disconnect()
+        device.connect(this, RobotOptions(itOptions()) { settingsCache = cache }).disconnect()
         val first = emu.time - t0
         val t1 = emu.time
-        val again = device.connect(this, itOptions().copy(settingsCache = cache))
+        val again = device.connect(this, RobotOptions(itOptions()) { settingsCache = cache })
         val second = emu.time - t1
         assertMirrors(again, emu.robots.single().settingsBytes())
         // Simulated time: the settings read is about 200 bytes at 115200 Bd, some 20 ms of link time.
@@ -156,13 +156,13 @@ class ConnectAndReflectIntegrationTest {
     @Test
     fun twoRobotsWithTheSameIdKeepTheirOwnSettings() = withEmulator(robots = 2) { emu ->
         val cache = org.pocketbot.sdk.InMemorySettingsCache()
-        val (a, b) = connectAll(emu, itOptions().copy(settingsCache = cache))
+        val (a, b) = connectAll(emu, RobotOptions(itOptions()) { settingsCache = cache })
         b.settings.identity.robotId.set(1) // both are robot 1 now, as every fresh robot is
         a.settings.linePid.kp.set(1.25)
         b.settings.linePid.kp.set(2.5)
         a.disconnect()
         b.disconnect()
-        val (a2, b2) = connectAll(emu, itOptions().copy(settingsCache = cache))
+        val (a2, b2) = connectAll(emu, RobotOptions(itOptions()) { settingsCache = cache })
         assertEquals(1, a2.identity.robotId)
         assertEquals(1, b2.identity.robotId)
         assertEquals(1.25, a2.settings.linePid.kp.value)

@@ -17,7 +17,7 @@ import kotlin.time.Duration
 import kotlin.time.Duration.Companion.seconds
 
 /** Options for emulated robots: the defaults users get, with a private settings cache per test. */
-fun itOptions(): RobotOptions = RobotOptions(settingsCache = InMemorySettingsCache())
+fun itOptions(): RobotOptions = RobotOptions { settingsCache = InMemorySettingsCache() }
 
 /**
  * Runs [block] against an embedded emulator with [robots] robots on simulated time: the SDK's clock is the
@@ -64,7 +64,8 @@ fun assertMirrors(robot: Robot, onRobot: ByteArray) {
     for (f in SETTINGS_FIELDS) {
         val mirrored = robot.settings[f.path]!!.value
         val expected = valueIn(onRobot, f.path)
-        val same = if (mirrored is Enum<*>) (expected as Int) == (mirrored as? org.pocketbot.protocol.SyncMode)?.code else expected == mirrored
+        // the SDK's enums and the wire's come from one schema: the same names
+        val same = if (mirrored is Enum<*>) org.pocketbot.protocol.SyncMode.fromCode(expected as Int).name == mirrored.name else expected == mirrored
         kotlin.test.assertTrue(same, "settings mirror of ${f.path}: $mirrored, robot holds $expected")
     }
 }

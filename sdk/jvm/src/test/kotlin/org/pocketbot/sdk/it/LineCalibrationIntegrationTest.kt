@@ -3,9 +3,9 @@ package org.pocketbot.sdk.it
 import kotlinx.coroutines.delay
 import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.RobotHandle
-import org.pocketbot.protocol.LineFollowStatus
 import org.pocketbot.sdk.LineCalibration
 import org.pocketbot.sdk.LineCalibrator
+import org.pocketbot.sdk.LineFollowStatus
 import org.pocketbot.sdk.Pose
 import org.pocketbot.sdk.Robot
 import kotlin.math.PI

@@ -120,7 +120,7 @@ class MovementIntegrationTest {
         robot.locomotion.enqueue(Movement.Arc(0.05, -90.0, 0.1))
         robot.locomotion.awaitIdle()
         val e1 = sim.state().encoders
-        robot.state.first { it.encoders == e1 }
+        robot.state.first { it.encoders.left == e1.left && it.encoders.right == e1.right }
         val pose = robot.odometry.pose.value
 
         // Exact: the heading is the thesis formula over the firmware's own total counts (theta = 2 pi r / (l T) (N2 - N1)).

@@ -8,11 +8,13 @@ import kotlin.test.assertFailsWith
 
 /** The SDK's named state fields follow the protocol definition, field for field. */
 class StateFieldsTest {
-    /** Every leaf of the schema's robot state in struct order: its dotted name, wire type and enum (or null). */
+    /** Every leaf of the schema's robot state in struct order: its dotted name, wire type and `enum:<name>` or `flags:<name>` (or null). */
     private fun schemaLeaves(): List<Triple<String, String, String?>> {
         val toml = File("../../protocol/pocketbot.toml").readText()
-        val fieldLine = Regex("""\{ name = "([a-z_0-9]+)", type = "([a-z_0-9\[\]]+)"(?:[^}]*?enum = "([a-z_]+)")?""")
-        fun leaves(body: String) = fieldLine.findAll(body).map { Triple(it.groupValues[1], it.groupValues[2], it.groupValues[3].ifEmpty { null }) }.toList()
+        val fieldLine = Regex("""\{ name = "([a-z_0-9]+)", type = "([a-z_0-9\[\]]+)"(?:[^}]*?((?:enum|flags) = "[a-z_]+"))?""")
+        fun leaves(body: String) = fieldLine.findAll(body).map { m ->
+            Triple(m.groupValues[1], m.groupValues[2], m.groupValues[3].ifEmpty { null }?.replace(" = ", ":")?.replace("\"", ""))
+        }.toList()
         val structs = Regex("""\[struct\.([a-z_]+)\][^\[]*?fields = \[(.*?)\n\]""", RegexOption.DOT_MATCHES_ALL).findAll(toml)
             .associate { m -> m.groupValues[1] to leaves(m.groupValues[2]) }
         return Regex("""\[\[state\]\]\s*name = "([a-z_]+)".*?fields = \[(.*?)\n\]""", RegexOption.DOT_MATCHES_ALL).findAll(toml)
@@ -37,6 +39,11 @@ class StateFieldsTest {
             // A code this side does not know reads as "unknown".
             return (Regex("""([a-z_]+) =""").findAll(values).map { it.groupValues[1] } + "unknown").maxOf { it.length }
         }
+        // A flags field reads as the names of its bits set, joined by '+': at most all of them.
+        fun flagsWidth(flags: String): Int {
+            val values = Regex("""\[flags\.$flags\][^\[]*?values = \{([^}]*)\}""").find(toml)!!.groupValues[1]
+            return Regex("""([a-z_]+) =""").findAll(values).sumOf { it.groupValues[1].length + 1 } - 1
+        }
         fun numberWidth(type: String): Int = when (type) {
             "u8" -> "255".length
             "u16" -> "65535".length
@@ -49,7 +56,8 @@ class StateFieldsTest {
         for ((name, type, enum) in schemaLeaves()) {
             val array = Regex("""([a-z0-9]+)\[(\d+)\]""").matchEntire(type)
             val expected = when {
-                enum != null -> enumWidth(enum)
+                enum != null && enum.startsWith("flags:") -> flagsWidth(enum.removePrefix("flags:"))
+                enum != null -> enumWidth(enum.removePrefix("enum:"))
                 array != null -> array.groupValues[2].toInt() * (numberWidth(array.groupValues[1]) + 1) - 1
                 else -> numberWidth(type)
             }

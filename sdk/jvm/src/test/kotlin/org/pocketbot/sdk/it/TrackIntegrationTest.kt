@@ -3,9 +3,9 @@ package org.pocketbot.sdk.it
 import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.first
 import org.junit.jupiter.api.Test
-import org.pocketbot.protocol.LocoMode
-import org.pocketbot.protocol.TrackStatus
+import org.pocketbot.sdk.LocoMode
 import org.pocketbot.sdk.SettingRefusedException
+import org.pocketbot.sdk.TrackStatus
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
 import kotlin.test.assertTrue

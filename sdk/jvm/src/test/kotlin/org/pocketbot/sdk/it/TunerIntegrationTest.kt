@@ -2,9 +2,9 @@ package org.pocketbot.sdk.it
 
 import org.junit.jupiter.api.Test
 import org.pocketbot.emulator.link.LinkSettings
-import org.pocketbot.protocol.SyncMode
 import org.pocketbot.sdk.Controller
 import org.pocketbot.sdk.StepSize
+import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.Tuner
 import kotlin.test.assertEquals
 import kotlin.test.assertNotNull

@@ -104,7 +104,7 @@ class EmulatorTransportTest {
         // As a phone on the same Wi-Fi does: the control port at the computer's network address, the robots there too.
         val devices = EmulatorDiscoverer(host, controlPort).list()
         assertEquals(emu.robots.map { "tcp://$host:${it.tcpPort}" }, devices.map { it.address })
-        val robot = devices[1].connect(this, RobotOptions(settingsCache = InMemorySettingsCache()))
+        val robot = devices[1].connect(this, RobotOptions { settingsCache = InMemorySettingsCache() })
         val sim = emu.robots[1]
         assertEquals(sim.name, robot.identity.name)
         assertEquals(host, sim.tcpClient?.address?.hostAddress, "the robot is held from the network address")

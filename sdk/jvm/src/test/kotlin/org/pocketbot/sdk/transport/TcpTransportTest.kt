@@ -19,12 +19,14 @@ import kotlinx.coroutines.channels.ClosedReceiveChannelException
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.flow.first
+import org.pocketbot.sdk.ConnectFailedException
 import org.pocketbot.sdk.connect
 import org.pocketbot.protocol.FrameResult
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.HelloRequest
 import org.pocketbot.protocol.ProtocolInfo
 import org.pocketbot.protocol.Slip
+import org.pocketbot.sdk.connect
 
 class TcpTransportTest {
     private val server = ServerSocket().apply { bind(InetSocketAddress(InetAddress.getLoopbackAddress(), 0)) }
@@ -65,7 +67,7 @@ class TcpTransportTest {
 
     @Test
     fun framesFlowBothWaysInOrder() = test {
-        val opening = async { TcpTransport.connect("127.0.0.1", port) }
+        val opening = async { TcpTransport.open("127.0.0.1", port) }
         val robot = acceptRobot()
         val t = opening.await()
         // not hello requests (the fake robot answers those): any bytes, including SLIP's special ones
@@ -82,7 +84,7 @@ class TcpTransportTest {
 
     @Test
     fun concurrentSendersNeverInterleaveTheirFrames() = test {
-        val opening = async { TcpTransport.connect("127.0.0.1", port) }
+        val opening = async { TcpTransport.open("127.0.0.1", port) }
         val robot = acceptRobot()
         val t = opening.await()
         val toRobot = (0 until 300).map { i -> byteArrayOf(0x20, i.toByte(), (i shr 8).toByte(), Slip.ESC, Slip.END, 1, 2) }
@@ -97,8 +99,7 @@ class TcpTransportTest {
     fun anOversizedFrameFromTheRobotIsCountedInTheRobotsLinkStats() = test {
         val device = TcpRobotDevice("127.0.0.1", port)
         val scope = this // the robot belongs to the test, not to the async that connects it
-        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions(
-            syncMode = org.pocketbot.protocol.SyncMode.NONE, settingsCache = null)) }
+        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions { syncMode = org.pocketbot.sdk.SyncMode.NONE; settingsCache = null }) }
         val robot = acceptRobot(answersCommands = true)
         val sdk = connecting.await()
         robot.sendRaw(Slip.encode(ByteArray(Frames.MAX_FRAME + 50) { 0x11 }))
@@ -113,8 +114,7 @@ class TcpTransportTest {
     fun aTcpRobotsStateReachesItsFlowOnTheSocketsOwnLoopThread() = test {
         val device = TcpRobotDevice("127.0.0.1", port)
         val scope = this
-        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions(
-            syncMode = org.pocketbot.protocol.SyncMode.NONE, settingsCache = null)) }
+        val connecting = async { device.connect(scope, org.pocketbot.sdk.RobotOptions { syncMode = org.pocketbot.sdk.SyncMode.NONE; settingsCache = null }) }
         val robot = acceptRobot(answersCommands = true)
         val sdk = connecting.await()
         val threads = java.util.concurrent.ConcurrentLinkedQueue<String>()
@@ -129,7 +129,7 @@ class TcpTransportTest {
 
     @Test
     fun brokenFramingFromTheRobotIsCountedAndTheLinkGoesOn() = test {
-        val opening = async { TcpTransport.connect("127.0.0.1", port) }
+        val opening = async { TcpTransport.open("127.0.0.1", port) }
         val robot = acceptRobot()
         val t = opening.await()
         robot.sendRaw(byteArrayOf(Slip.END, 1, 2, Slip.ESC, 7, 3, Slip.END))
@@ -141,7 +141,7 @@ class TcpTransportTest {
 
     @Test
     fun theRobotHangingUpLosesTheLink() = test {
-        val opening = async { TcpTransport.connect("127.0.0.1", port) }
+        val opening = async { TcpTransport.open("127.0.0.1", port) }
         val robot = acceptRobot()
         val t = opening.await()
         robot.sendFrame(Frames.encode(HelloRequest(1, 1L), seq = 1))
@@ -155,7 +155,7 @@ class TcpTransportTest {
 
     @Test
     fun closeIsIdempotentAndTheRobotSeesTheEnd() = test {
-        val opening = async { TcpTransport.connect("127.0.0.1", port) }
+        val opening = async { TcpTransport.open("127.0.0.1", port) }
         val robot = acceptRobot()
         val t = opening.await()
         t.close()
@@ -169,7 +169,18 @@ class TcpTransportTest {
     fun connectingWhereNothingListensFailsWithTransportLost() = test {
         val closedPort = ServerSocket(0, 1, InetAddress.getLoopbackAddress()).use { it.localPort }
         val e = assertFailsWith<TransportLostException> { TcpRobotDevice("127.0.0.1", closedPort).open() }
-        assertTrue(e.message!!.endsWith("127.0.0.1:$closedPort: connection refused"), e.message)
+        assertEquals("tcp://127.0.0.1:$closedPort: nothing listens there (connection refused): is the emulator " +
+            "(make emulator, pocketbot emulator) or the robot's TCP bridge running?", e.message)
+    }
+
+    @Test
+    fun connectingARobotWhereNothingListensSaysSoWithTheAddressOnce() = test {
+        val closedPort = ServerSocket(0, 1, InetAddress.getLoopbackAddress()).use { it.localPort }
+        val started = System.nanoTime()
+        val e = assertFailsWith<ConnectFailedException> { TcpRobotDevice("127.0.0.1", closedPort).connect(this) }
+        assertEquals("cannot connect to tcp://127.0.0.1:$closedPort: nothing listens there (connection refused): is the " +
+            "emulator (make emulator, pocketbot emulator) or the robot's TCP bridge running?", e.message)
+        assertTrue(System.nanoTime() - started < 2_000_000_000L, "at once, not after the handshake's retries")
     }
 
     @Test

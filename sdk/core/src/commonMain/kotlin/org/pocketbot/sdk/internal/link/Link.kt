@@ -2,6 +2,7 @@ package org.pocketbot.sdk.internal.link
 
 import kotlinx.coroutines.CancellationException
 import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.CompletableJob
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Job
 import kotlinx.coroutines.channels.BufferOverflow
@@ -83,6 +84,8 @@ internal class Link(
     /** Scope of the robot's own coroutines. */
     private val scope: CoroutineScope,
     private val robotJob: Job,
+    /** The robot in its caller's scope: the link's coroutines and the goodbye at [close] run under it. */
+    private val lifetime: CompletableJob,
     override val debugLog: DebugLog,
     /** The SDK's random choices for this robot ([org.pocketbot.sdk.RobotRuntime.random]). */
     val random: Random,
@@ -430,20 +433,19 @@ internal class Link(
         setConnection(ConnectionState.Closed(cause))
         val transport = current?.transport
         if (goodbye && connected && transport != null) {
-            // Outside the robot's scope, which ends now (a job of its own); bounded by a command timeout.
-            CoroutineScope(context + Job()).launch {
+            // Beside the link's coroutines, which end now; bounded by a command timeout. The caller's scope waits for it.
+            CoroutineScope(context + lifetime).launch {
                 try {
                     withTimeoutOrNull(options.commandTimeout) { transport.send(table.open(Goodbye(QueueOnLeave.FINISH.ordinal)).frame) }
                 } catch (e: Throwable) {
                     // Gone already: the robot's failsafe stops what this host drove.
-                } finally {
-                    transport.close()
                 }
-            }
+            }.invokeOnCompletion { transport.close() } // also when the scope was cancelled before it ran
         } else {
             transport?.close()
         }
         robotJob.cancel()
+        lifetime.complete()
     }
 
     // ---- incoming ----

@@ -21,7 +21,7 @@ import org.pocketbot.protocol.StateFull
 import org.pocketbot.sdk.ConnectionState
 import org.pocketbot.sdk.DebugLog
 import org.pocketbot.sdk.ScriptedRobot
-import org.pocketbot.sdk.internal.EMPTY_STATE
+import org.pocketbot.sdk.WIRE_EMPTY
 import org.pocketbot.sdk.runtime
 import org.pocketbot.sdk.testOptions
 import kotlin.random.Random
@@ -61,9 +61,10 @@ class LinkTest {
 
     private fun TestScope.link(peer: ScriptedRobot, client: LinkClient): Link {
         // A child of the test: a failing test ends the link too, instead of leaving it to run on virtual time.
-        val job = SupervisorJob(backgroundScope.coroutineContext[Job])
+        val lifetime = Job(backgroundScope.coroutineContext[Job])
+        val job = SupervisorJob(lifetime)
         val serial = runtime().dispatcher.limitedParallelism(1) // as a Robot runs its link
-        return Link(peer.device, testOptions(), serial, CoroutineScope(serial + job), job, DebugLog(), Random(1))
+        return Link(peer.device, testOptions(), serial, CoroutineScope(serial + job), job, lifetime, DebugLog(), Random(1))
             .also { it.client = client }
     }
 
@@ -76,7 +77,7 @@ class LinkTest {
         assertEquals(ConnectionState.Connected, link.connection.value)
         assertEquals(listOf(true), client.restores, "the first session is restored once")
         assertEquals(peer.robotId, link.identity.value?.robotId)
-        peer.send(StateFull(EMPTY_STATE))
+        peer.send(StateFull(WIRE_EMPTY))
         peer.send(DebugText(0, 2, "hello".encodeToByteArray()))
         peer.sendRaw(byteArrayOf(1, 2, 3)) // not a frame: counted, not handed on
         runCurrent()
@@ -98,7 +99,7 @@ class LinkTest {
         }
         link = link(peer, client)
         link.start()
-        repeat(3) { peer.send(StateFull(EMPTY_STATE)) }
+        repeat(3) { peer.send(StateFull(WIRE_EMPTY)) }
         runCurrent()
         assertEquals(listOf(1L, 2L, 3L), countsSeen, "the link's count already includes the state its client is handed")
         link.close(null)

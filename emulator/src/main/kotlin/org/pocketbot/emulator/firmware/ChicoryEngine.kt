@@ -2,13 +2,11 @@ package org.pocketbot.emulator.firmware
 
 import com.dylibso.chicory.runtime.ExportFunction
 import com.dylibso.chicory.runtime.GlobalInstance
-import com.dylibso.chicory.runtime.HostFunction
 import com.dylibso.chicory.runtime.ImportValues
 import com.dylibso.chicory.runtime.Instance
-import com.dylibso.chicory.runtime.WasmFunctionHandle
-import com.dylibso.chicory.wasm.types.FunctionType
+import com.dylibso.chicory.runtime.Memory
+import com.dylibso.chicory.wasm.types.MemoryLimits
 import com.dylibso.chicory.wasm.types.MutabilityType
-import com.dylibso.chicory.wasm.types.ValType
 
 /**
  * One Chicory instance of a firmware image that runs the firmware of many robots, one call at a time, on one thread.
@@ -20,15 +18,10 @@ import com.dylibso.chicory.wasm.types.ValType
  * costs is mostly the cache lines it touches. [FirmwareImage] keeps one engine per thread, or one per robot for a
  * module whose code changes its tables or data segments (state the engine does not swap).
  */
-internal class FirmwareEngine(image: FirmwareImage) {
+internal class ChicoryEngine(image: FirmwareImage) {
     val memory: LinearMemory
     val instance: Instance
-    private var host: FirmwareHost? = null
-    private var bound: FirmwareInstance? = null
-    // One result array per engine, reused: Chicory reads it before the next host call, and these calls happen
-    // several times per robot and simulated millisecond.
-    private val sweepResult = LongArray(1)
-    private val sensorResult = LongArray(1)
+    private var bound: ChicoryFirmware? = null
     private val globals: Array<GlobalInstance>
 
     val init: ExportFunction
@@ -42,17 +35,9 @@ internal class FirmwareEngine(image: FirmwareImage) {
     val linkTxTake: ExportFunction?
 
     init {
-        val i32 = ValType.I32
-        val i64 = ValType.I64
-        val imports = ImportValues.builder()
-            .addFunction(
-                HostFunction("env", "line_adc_sweep", FunctionType.of(listOf(i32), listOf(i64)), HostCall(LINE_ADC_SWEEP)),
-                HostFunction("env", "sensor_read", FunctionType.of(listOf(i32), listOf(i32)), HostCall(SENSOR_READ)),
-                HostFunction("env", "ir_send", FunctionType.of(listOf(i32, i32, i32, i32, i32, i32), listOf()), HostCall(IR_SEND)),
-            )
-            .build()
+        // The firmware imports nothing (sim_abi.h): sensor readings and IR messages are data in its memory.
         var created: LinearMemory? = null
-        val builder = Instance.builder(image.module).withImportValues(imports)
+        val builder = Instance.builder(image.module).withImportValues(ImportValues.empty())
             .withMemoryFactory { limits -> LinearMemory(limits).also { created = it } }
         image.machineFactory?.let { builder.withMachineFactory(it) }
         instance = builder.build()
@@ -76,20 +61,18 @@ internal class FirmwareEngine(image: FirmwareImage) {
     fun initialGlobals(): LongArray = LongArray(globals.size * 2).also { save(it) }
 
     /** Makes this engine run [fw]'s firmware until [leave]. */
-    fun enter(fw: FirmwareInstance) {
+    fun enter(fw: ChicoryFirmware) {
         check(bound == null) { "a firmware call from inside another firmware call on the same thread" }
         bound = fw
-        host = fw.host
         memory.bytes = fw.linear.bytes
         val g = fw.globals
         for (k in globals.indices) { globals[k].setValueLow(g[2 * k]); globals[k].setValueHigh(g[2 * k + 1]) }
     }
 
-    fun leave(fw: FirmwareInstance) {
+    fun leave(fw: ChicoryFirmware) {
         fw.linear.bytes = memory.bytes // a memory.grow replaced the array
         save(fw.globals)
         memory.bytes = EMPTY
-        host = null
         bound = null
     }
 
@@ -97,31 +80,65 @@ internal class FirmwareEngine(image: FirmwareImage) {
         for (k in globals.indices) { into[2 * k] = globals[k].valueLow; into[2 * k + 1] = globals[k].valueHigh }
     }
 
-    /**
-     * The firmware's imports, all of one class: the compiled firmware calls every import through one call site, which
-     * then sees a single receiver class and the JIT inlines the call (three lambdas made it a virtual call).
-     */
-    private inner class HostCall(private val import: Int) : WasmFunctionHandle {
-        override fun apply(instance: Instance, args: LongArray): LongArray? {
-            val host = host!!
-            return when (import) {
-                LINE_ADC_SWEEP -> sweepResult.also { it[0] = host.lineAdcSweep(args[0].toInt()) }
-                SENSOR_READ -> sensorResult.also { it[0] = host.sensorRead(args[0].toInt()).toLong() }
-                else -> {
-                    host.irSend(args[0].toInt(), args[1].toInt(), args[2].toInt(), args[3].toInt(), args[4].toInt(), args[5].toInt())
-                    null
-                }
-            }
-        }
-    }
-
     /** Export [name] of this instance, or null. */
     fun exportOrNull(name: String): ExportFunction? = runCatching { instance.export(name) }.getOrNull()
 
     private companion object {
         val EMPTY = ByteArray(0)
-        const val LINE_ADC_SWEEP = 0
-        const val SENSOR_READ = 1
-        const val IR_SEND = 2
+    }
+}
+
+/**
+ * A robot's firmware run by Chicory: its linear memory and mutable globals live here between calls, and each call runs
+ * in the calling thread's [ChicoryEngine] (see there), or in an engine of its own for an image whose robots cannot
+ * share one.
+ */
+internal class ChicoryFirmware(private val image: FirmwareImage) : FirmwareInstance(
+    LinearMemory(MemoryLimits(image.initialMemory.size / Memory.PAGE_SIZE)).apply { bytes = image.initialMemory.copyOf() },
+) {
+    private val ownEngine: ChicoryEngine? = if (image.sharesEngines) null else ChicoryEngine(image)
+
+    internal val linear: LinearMemory get() = memory as LinearMemory
+
+    /** The mutable globals between calls, low and high word each (see [ChicoryEngine.enter]). */
+    internal val globals: LongArray = image.initialGlobals.copyOf()
+
+    init {
+        findAddresses()
+    }
+
+    /** Runs [block] in an engine bound to this firmware. */
+    private inline fun <T> call(block: (ChicoryEngine) -> T): T {
+        val engine = ownEngine ?: image.engine()
+        engine.enter(this)
+        try {
+            return block(engine)
+        } catch (t: Throwable) {
+            if (ownEngine == null) image.discardEngine()
+            throw t
+        } finally {
+            engine.leave(this)
+        }
+    }
+
+    override fun address(name: String): Int? = call { it.exportOrNull(name)?.apply()?.get(0)?.toInt() }
+
+    override fun init(robotId: Int) { call { it.init.apply(robotId.toLong()) } }
+
+    override fun advance(nowTicks: Long) { call { it.advance.apply(nowTicks) } }
+
+    override fun encoderEdge(wheel: Int, ticks: Long) { call { it.encoderEdge.apply(wheel.toLong(), ticks) } }
+
+    override fun uartRx(byte: Int) { call { it.uartRx.apply(byte.toLong()) } }
+
+    override fun runEvents(count: Int, endTicks: Long) { call { it.runEvents.apply(count.toLong(), endTicks) } }
+
+    override fun uartTxTake(max: Int): Int = call { it.uartTxTake.apply(max.toLong())[0].toInt() }
+
+    override fun linkTxTake(link: Int, max: Int): Int =
+        if (link == 0) uartTxTake(max) else call { it.linkTxTake?.apply(link.toLong(), max.toLong())?.get(0)?.toInt() ?: 0 }
+
+    override fun irRx(side: Int, senderId: Int, senderLed: Int, power: Int, len: Int, payloadLo: Int, payloadHi: Int) {
+        call { it.irRx.apply(side.toLong(), senderId.toLong(), senderLed.toLong(), power.toLong(), len.toLong(), payloadLo.toLong(), payloadHi.toLong()) }
     }
 }
