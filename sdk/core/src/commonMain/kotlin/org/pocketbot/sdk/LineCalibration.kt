@@ -152,7 +152,7 @@ public class LineCalibrator(private val robot: Robot) {
 
     /** Turns in place to [headingDeg] (odometry), unless the robot already faces within [TURN_TOLERANCE_DEG] of it. */
     private suspend fun turnTo(headingDeg: Double, speedMps: Double) {
-        val error = normalizeDeg(headingDeg - standStill().headingRad * DEG_PER_RAD)
+        val error = wrapAngle(headingDeg / DEG_PER_RAD - standStill().headingRad) * DEG_PER_RAD
         if (kotlin.math.abs(error) < TURN_TOLERANCE_DEG) return
         val result = robot.locomotion.enqueue(Movement.Rotate(error, speedMps)).await()
         if (result.outcome != MovementOutcome.FINISHED) throw RobotException("the calibration sweep was interrupted: $result")
@@ -241,12 +241,5 @@ public class LineCalibrator(private val robot: Robot) {
 
         private const val DEG_PER_RAD = 180.0 / kotlin.math.PI
         private const val TURN_TOLERANCE_DEG = 1.5
-
-        private fun normalizeDeg(deg: Double): Double {
-            var d = deg % 360.0
-            if (d > 180) d -= 360.0
-            if (d < -180) d += 360.0
-            return d
-        }
     }
 }
