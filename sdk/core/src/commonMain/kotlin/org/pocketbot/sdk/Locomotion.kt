@@ -120,7 +120,7 @@ public class Locomotion internal constructor(
     public val state: StateFlow<RobotState.Locomotion> = _state.asStateFlow()
 
     /** What drives the motors now. */
-    public val mode: LocoMode get() = modeOf(_state.value)
+    public val mode: LocoMode get() = _state.value.mode
 
     /** The movements this host queued that have not ended yet, in order: the robot's queue as this host knows it. */
     public val queue: StateFlow<List<MovementHandle>> = _queue.asStateFlow()
@@ -430,8 +430,6 @@ public class Locomotion internal constructor(
 
         /** Longer than the robot takes to stand still and report after a movement ends (about 300 ms at most). */
         private const val SETTLE_MS = 500L
-
-        private fun modeOf(s: RobotState.Locomotion): LocoMode = s.mode
 
         private fun describe(o: MovementOutcome): String = when (o) {
             MovementOutcome.FINISHED -> "finished"
