@@ -194,7 +194,7 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         modes.record(parallel, System.nanoTime() - start, n, ms)
         // With everyone alone, what happens between robots at a step's end is nothing at all.
         if (together.isNotEmpty()) repeat(ms) { stepLocked(together) }
-        nowTicks = t0 + ms * SimTime.STEP_TICKS
+        advanceTo(t0 + ms * SimTime.STEP_TICKS)
     }
 
     /** [ms] steps of a robot that nothing reaches meanwhile: IR it sends is heard by no one, as at a step's end. */
@@ -226,7 +226,12 @@ public class Emulator(world: World, public val config: EmulatorConfig = Emulator
         val end = System.nanoTime()
         serialNs += end - phaseEnd
         if (rs === sim.robots) modes.record(parallel, end - start, n, 1)
-        nowTicks = t1
+        advanceTo(t1)
+    }
+
+    /** Simulated time moved on to [ticks], in a step or a block: whoever waits in [isStepped] learns it. */
+    private fun advanceTo(ticks: Long) {
+        nowTicks = ticks
         if (stepWaiters.isNotEmpty()) {
             stepWaiters.forEach { it.complete(Unit) }
             stepWaiters.clear()

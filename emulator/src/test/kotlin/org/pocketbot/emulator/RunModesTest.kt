@@ -13,6 +13,7 @@ import org.pocketbot.emulator.world.Worlds
 import kotlin.test.assertEquals
 import kotlin.test.assertTrue
 import kotlin.time.Duration.Companion.days
+import kotlin.time.Duration.Companion.milliseconds
 import kotlin.time.Duration.Companion.minutes
 import kotlin.time.Duration.Companion.nanoseconds
 import kotlin.time.Duration.Companion.seconds
@@ -32,6 +33,21 @@ class RunModesTest {
         while (!condition()) {
             check(System.nanoTime() < deadline) { "never: $what" }
             Thread.sleep(1)
+        }
+    }
+
+    @Test
+    fun `an emulator stepped in blocks by runFor counts as running for a robot's connection`() {
+        // Two robots far apart on the open floor: out of each other's reach, runFor steps them in blocks.
+        Emulator.local(robots = 2, world = "open").use { emu ->
+            val stepping = java.util.concurrent.atomic.AtomicBoolean(true)
+            val stepper = Thread { while (stepping.get()) emu.runFor(100.milliseconds) }.apply { start() }
+            try {
+                assertTrue(runBlocking { emu.isStepped(2.seconds) }, "a connection would be told the emulator is not running")
+            } finally {
+                stepping.set(false)
+                stepper.join()
+            }
         }
     }
 
