@@ -421,15 +421,16 @@ class MoveCommand : DrivingCommand("move", 2..3) {
 
     private val movement by lazy {
         val numbers = rest.drop(1).map { it.toDoubleOrNull() ?: throw UsageError("'$it' is not a number") }
+        // The speed is an option: a number after the amount is most likely meant as one.
+        fun one(): Double = numbers.singleOrNull()
+            ?: throw UsageError("${rest.first()} wants one number, not ${numbers.size}" + if (numbers.size > 1) " (the speed is --speed)" else "")
         try {
             when (rest.first()) {
-                "straight" -> Movement.Straight(numbers.single(), speed)
-                "rotate" -> Movement.Rotate(numbers.single(), speed)
+                "straight" -> Movement.Straight(one(), speed)
+                "rotate" -> Movement.Rotate(one(), speed)
                 "arc" -> if (numbers.size == 2) Movement.Arc(numbers[0], numbers[1], speed) else throw UsageError("arc wants RADIUS_M ANGLE_DEG")
                 else -> throw UsageError("movement is straight, rotate or arc, not '${rest.first()}'")
             }
-        } catch (e: NoSuchElementException) {
-            throw UsageError("${rest.first()} wants one number")
         } catch (e: IllegalArgumentException) {
             throw UsageError(e.message ?: "bad movement")
         }

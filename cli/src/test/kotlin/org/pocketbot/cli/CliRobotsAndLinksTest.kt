@@ -99,6 +99,13 @@ class CliRobotsAndLinksTest {
     }
 
     @Test
+    fun aSpeedWrittenAfterTheDistanceIsAUsageErrorThatNamesTheOption() {
+        val r = runPocketBot(listOf("move", "tcp://127.0.0.1:1", "straight", "1.0", "0.2"))
+        assertEquals(2, r.code, "$r")
+        assertTrue(r.err.contains("straight wants one number, not 2 (the speed is --speed)"), "$r")
+    }
+
+    @Test
     fun aScanWithoutABluetoothAdapterSaysSoWithoutAskingDBus() {
         assumeFalse(File("/sys/class/bluetooth/hci0").exists(), "this machine has a Bluetooth adapter")
         val run = runPocketBot(listOf("--sources", "bluetooth", "--scan-seconds", "30", "scan"))
