@@ -13,6 +13,7 @@ import org.openjdk.jmh.runner.Runner
 import org.openjdk.jmh.runner.options.OptionsBuilder
 import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.Speed
+import org.pocketbot.emulator.link.LinkSettings
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.Slip
 import org.pocketbot.protocol.StateReduced
@@ -21,6 +22,7 @@ import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.StateUpdate
 import org.pocketbot.sdk.SyncMode
+import kotlin.time.Duration
 import kotlin.time.Duration.Companion.milliseconds
 
 /**
@@ -29,8 +31,9 @@ import kotlin.time.Duration.Companion.milliseconds
  *   java -cp sdk/bench/target/classes:$(cat sdk/bench/target/classpath.txt) org.pocketbot.bench.SdkBenchKt [codec] [realtime] [connect]
  */
 fun main(args: Array<String>) {
-    val which = args.toSet().ifEmpty { setOf("codec", "realtime", "connect", "fleet") }
+    val which = args.toSet().ifEmpty { setOf("codec", "realtime", "connect", "fleet", "ack") }
     if ("codec" in which) codec()
+    if ("ack" in which) ack()
     if ("connect" in which) connect()
     if ("realtime" in which) realtime()
     if ("fleet" in which) fleet()
@@ -71,6 +74,37 @@ private fun fleet() {
     // What ktor's sockets cost per update against the SDK's loop, round by round.
     line("fleet_ktor_cost_ratio", spread(rounds.map { it.getValue(FleetBench.Link.TCP_KTOR).usPerUpdate / it.getValue(FleetBench.Link.TCP).usPerUpdate }, "%.2f"))
 }
+
+/**
+ * Command to acknowledgement (AckBench) of one emulated robot in real time, directly over TCP, in [ACK_ROUNDS]
+ * rounds; each metric is the median of the rounds and their range, beside the load average. The robot's own link
+ * is made as fast as the emulator allows (10 Mbaud, no latency: what is left is the firmware's 1 ms step), so the
+ * figures are the host's path; `tcp_uart_ack_*` is the same over the emulator's default link, a 115200-baud UART
+ * with 2 ms latency that also carries the robot's 100 Hz state, as a real robot's serial or Bluetooth link.
+ */
+private fun ack() {
+    line("ack_load_average_before", loadAverage())
+    val tcp = List(ACK_ROUNDS) { tcpAck(LinkSettings(baud = 10_000_000, latency = Duration.ZERO)) }
+    val uart = tcpAck(LinkSettings())
+    line("ack_load_average_after", loadAverage())
+    line("tcp_ack_p50_ms", spread(tcp.map { it.p50Ms }, "%.3f"))
+    line("tcp_ack_p99_ms", spread(tcp.map { it.p99Ms }, "%.3f"))
+    line("tcp_uart_ack_p50_ms", "%.3f".format(uart.p50Ms))
+    line("tcp_uart_ack_p99_ms", "%.3f".format(uart.p99Ms))
+}
+
+private fun tcpAck(link: LinkSettings): AckBench.Result = Emulator.local(robots = 1).use { emu ->
+    emu.robots.single().link = link
+    emu.start(Speed.Realtime(1.0))
+    val port = emu.robots.single().startTcp(0)
+    val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
+    val r = runBlocking { AckBench.run(scope, org.pocketbot.sdk.transport.TcpRobotDevice("127.0.0.1", port)) }
+    scope.cancel()
+    emu.stop()
+    r
+}
+
+private const val ACK_ROUNDS = 3
 
 private const val FLEET = 1000
 private const val FLEET_ROUNDS = 3
