@@ -76,7 +76,7 @@ internal object FleetBench {
      */
     class Result(
         val n: Int, val transport: Link, val cores: Double, val usPerUpdate: Double, val p99Ms: Double, val updates: Long,
-        val timed: Long, val late: Long,
+        val timed: Long, val late: Long, val broker: BrokerPath.Load? = null,
     )
 
     /** The robot side of one stand-in: what it answers to the host's frames. */
@@ -185,7 +185,7 @@ internal object FleetBench {
     }
 
     /** How the host reaches the stand-ins. */
-    enum class Link(val label: String) {
+    enum class Link(val label: String, val broker: Boolean = false) {
         /** The SDK's [TcpRobotDevice]: its socket loop reads, and the robot's link runs there too. */
         TCP("tcp"),
 
@@ -197,10 +197,20 @@ internal object FleetBench {
 
         /** Frames handed over in process: the SDK without any socket. */
         IN_PROCESS("in-process"),
+
+        /**
+         * Through one Mosquitto broker with the shipped configuration (TLS): a gateway (in this process, so the CPU
+         * per update is the gateway's and the fleet client's) serves the in-process stand-ins, batching their state
+         * frames (`upBatchWindow` 10 ms, the default).
+         */
+        BROKER("broker", broker = true),
+
+        /** The same with every state frame in a message of its own (`upBatchWindow` 0). */
+        BROKER_UNBATCHED("broker-unbatched", broker = true),
     }
 
     fun run(n: Int, link: Link, seconds: Int): Result = runBlocking {
-        val tcp = link != Link.IN_PROCESS
+        val tcp = link == Link.TCP || link == Link.TCP_KTOR
         val responders = List(n) { Responder(it) }
         val stamps = Stamps(n)
         val histogram = Histogram()
@@ -222,8 +232,10 @@ internal object FleetBench {
         } else {
             devices = List(n) { i -> InProcessStandIn(responders[i]) { sinks[i] = it } }
         }
+        // Through a broker: a gateway in this process serves the in-process stand-ins, the fleet reaches them over MQTT.
+        val broker = if (link.broker) BrokerPath.start(devices, batched = link == Link.BROKER) else null
         val fleet = Fleet(scope, RobotOptions { settingsCache = InMemorySettingsCache() })
-        val robots = fleet.connectAll(devices)
+        val robots = fleet.connectAll(broker?.devices ?: devices)
         robots.forEach { it.reflector.set(org.pocketbot.sdk.SyncMode.FULL, PERIOD_MS.milliseconds) }
         robots.forEachIndexed { i, r ->
             scope.launch(Dispatchers.Unconfined) {
@@ -259,20 +271,23 @@ internal object FleetBench {
         val updates0 = robots.sumOf { it.linkStats.value.fullStates }
         val cpu0 = os.processCpuTime - robotThreads.sumOf { threads.getThreadCpuTime(it.id) } - jitCpuNanos()
         val wall0 = System.nanoTime()
+        broker?.measureFrom()
         measuring.set(true)
         delay(seconds * 1000L)
         measuring.set(false)
+        val brokerLoad = broker?.measured()
         val wall = System.nanoTime() - wall0
         val cpu = os.processCpuTime - robotThreads.sumOf { threads.getThreadCpuTime(it.id) } - jitCpuNanos() - cpu0
         val updates = robots.sumOf { it.linkStats.value.fullStates } - updates0
         ticker.interrupt()
         fleet.disconnect()
         server?.close()
+        broker?.close()
         scope.cancel()
         repeat(late.get().coerceAtMost(Int.MAX_VALUE.toLong()).toInt()) { histogram.add(Long.MAX_VALUE / 2) }
         Result(
             n, link, cpu.toDouble() / wall, cpu / 1000.0 / updates.coerceAtLeast(1),
-            histogram.percentileMs(0.99), updates, histogram.count.get() - late.get(), late.get(),
+            histogram.percentileMs(0.99), updates, histogram.count.get() - late.get(), late.get(), brokerLoad,
         )
     }
 

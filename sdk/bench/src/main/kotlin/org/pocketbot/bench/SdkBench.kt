@@ -22,6 +22,8 @@ import org.pocketbot.sdk.InMemorySettingsCache
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.StateUpdate
 import org.pocketbot.sdk.SyncMode
+import org.pocketbot.sdk.transport.RobotDevice
+import org.pocketbot.sdk.transport.TcpRobotDevice
 import kotlin.time.Duration
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -31,9 +33,10 @@ import kotlin.time.Duration.Companion.milliseconds
  *   java -cp sdk/bench/target/classes:$(cat sdk/bench/target/classpath.txt) org.pocketbot.bench.SdkBenchKt [codec] [realtime] [connect]
  */
 fun main(args: Array<String>) {
-    val which = args.toSet().ifEmpty { setOf("codec", "realtime", "connect", "fleet", "ack") }
+    val which = args.toSet().ifEmpty { setOf("codec", "realtime", "connect", "fleet", "ack", "broker-fleet") }
     if ("codec" in which) codec()
     if ("ack" in which) ack()
+    if ("broker-fleet" in which) brokerFleet()
     if ("connect" in which) connect()
     if ("realtime" in which) realtime()
     if ("fleet" in which) fleet()
@@ -57,13 +60,14 @@ fun main(args: Array<String>) {
  */
 private fun fleet() {
     line("fleet_load_average_before", loadAverage())
-    val rounds = List(FLEET_ROUNDS) { FleetBench.Link.entries.associateWith { FleetBench.run(FLEET, it, seconds = 5).also(::report) } }
+    val links = FleetBench.Link.entries.filter { !it.broker }
+    val rounds = List(FLEET_ROUNDS) { links.associateWith { FleetBench.run(FLEET, it, seconds = 5).also(::report) } }
     line("fleet_load_average_after", loadAverage())
-    for (link in FleetBench.Link.entries) {
+    for (link in links) {
         val suffix = when (link) {
             FleetBench.Link.TCP -> ""
             FleetBench.Link.TCP_KTOR -> "_ktor"
-            FleetBench.Link.IN_PROCESS -> "_in_process"
+            else -> "_in_process"
         }
         val rs = rounds.map { it.getValue(link) }
         line("fleet_robots_per_core$suffix", spread(rs.map { 1e6 / (it.usPerUpdate * UPDATES_PER_ROBOT_SECOND) }, "%.0f"))
@@ -76,35 +80,87 @@ private fun fleet() {
 }
 
 /**
- * Command to acknowledgement (AckBench) of one emulated robot in real time, directly over TCP, in [ACK_ROUNDS]
- * rounds; each metric is the median of the rounds and their range, beside the load average. The robot's own link
- * is made as fast as the emulator allows (10 Mbaud, no latency: what is left is the firmware's 1 ms step), so the
- * figures are the host's path; `tcp_uart_ack_*` is the same over the emulator's default link, a 115200-baud UART
- * with 2 ms latency that also carries the robot's 100 Hz state, as a real robot's serial or Bluetooth link.
+ * Command to acknowledgement (AckBench) of one emulated robot in real time, directly over TCP, through one broker and
+ * through a bridged pair (gateway on the room broker, client on the central one), in [ACK_ROUNDS] rounds that take
+ * the three paths in turn (the machine is shared: compare within the run); each metric is the median of the rounds
+ * and their range, beside the load average. The robot's own link is made as fast as the emulator allows (10 Mbaud,
+ * no latency: what is left is the firmware's 1 ms step), so the figures are the host's path; `tcp_uart_ack_*` is
+ * the direct path over the emulator's default link, a 115200-baud UART with 2 ms latency that also carries the
+ * robot's 100 Hz state, as a real robot's serial or Bluetooth link does.
  */
 private fun ack() {
     line("ack_load_average_before", loadAverage())
-    val tcp = List(ACK_ROUNDS) { tcpAck(LinkSettings(baud = 10_000_000, latency = Duration.ZERO)) }
-    val uart = tcpAck(LinkSettings())
+    val rounds = List(ACK_ROUNDS) {
+        Emulator.local(robots = 1).use { emu ->
+            val sim = emu.robots.single()
+            sim.link = LinkSettings(baud = 10_000_000, latency = Duration.ZERO)
+            emu.start(Speed.Realtime(1.0))
+            val port = sim.startTcp(0)
+            val tcp = ackOver { TcpRobotDevice("127.0.0.1", port) }
+            val broker = runBlocking { BrokerPath.start(listOf(sim.device())) }.use { path -> ackOver { path.devices.single() } }
+            val bridged = runBlocking { BrokerPath.start(listOf(sim.device()), bridged = true) }.use { path -> ackOver { path.devices.single() } }
+            emu.stop()
+            mapOf("tcp" to tcp, "broker" to broker, "bridged" to bridged)
+        }
+    }
+    val uart = Emulator.local(robots = 1).use { emu ->
+        emu.start(Speed.Realtime(1.0))
+        val port = emu.robots.single().startTcp(0)
+        ackOver { TcpRobotDevice("127.0.0.1", port) }.also { emu.stop() }
+    }
     line("ack_load_average_after", loadAverage())
-    line("tcp_ack_p50_ms", spread(tcp.map { it.p50Ms }, "%.3f"))
-    line("tcp_ack_p99_ms", spread(tcp.map { it.p99Ms }, "%.3f"))
+    for (path in listOf("tcp", "broker", "bridged")) {
+        line("${path}_ack_p50_ms", spread(rounds.map { it.getValue(path).p50Ms }, "%.3f"))
+        line("${path}_ack_p99_ms", spread(rounds.map { it.getValue(path).p99Ms }, "%.3f"))
+    }
+    line("broker_ack_p50_vs_tcp", spread(rounds.map { it.getValue("broker").p50Ms / it.getValue("tcp").p50Ms }, "%.2fx"))
+    line("bridged_ack_p50_vs_tcp", spread(rounds.map { it.getValue("bridged").p50Ms / it.getValue("tcp").p50Ms }, "%.2fx"))
     line("tcp_uart_ack_p50_ms", "%.3f".format(uart.p50Ms))
     line("tcp_uart_ack_p99_ms", "%.3f".format(uart.p99Ms))
 }
 
-private fun tcpAck(link: LinkSettings): AckBench.Result = Emulator.local(robots = 1).use { emu ->
-    emu.robots.single().link = link
-    emu.start(Speed.Realtime(1.0))
-    val port = emu.robots.single().startTcp(0)
+/** AckBench over the device [device] makes, in a scope of its own. */
+private fun ackOver(device: suspend () -> RobotDevice): AckBench.Result = runBlocking {
     val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
-    val r = runBlocking { AckBench.run(scope, org.pocketbot.sdk.transport.TcpRobotDevice("127.0.0.1", port)) }
-    scope.cancel()
-    emu.stop()
-    r
+    try {
+        AckBench.run(scope, device())
+    } finally {
+        scope.cancel()
+    }
 }
 
 private const val ACK_ROUNDS = 3
+
+/**
+ * State through one broker (FleetBench over [FleetBench.Link.BROKER] and [FleetBench.Link.BROKER_UNBATCHED]): a
+ * gateway serves [BROKER_FLEET] stand-in robots at 100 full states a second each, a fleet client in the same process
+ * receives them through Mosquitto; batched (the default 10 ms window) and unbatched in turn, [BROKER_FLEET_ROUNDS]
+ * rounds. Per mode: state frames and up messages a second the broker carried, the share of the offered states that
+ * arrived, the broker's CPU (in cores), and from it the robots at 100 Hz one broker core carries (the goal is
+ * >= 500 batched), and the p99 latency of a state from the stand-in to the client's collector.
+ */
+private fun brokerFleet() {
+    line("broker_fleet_load_average_before", loadAverage())
+    val modes = listOf(FleetBench.Link.BROKER, FleetBench.Link.BROKER_UNBATCHED)
+    val rounds = List(BROKER_FLEET_ROUNDS) { modes.associateWith { FleetBench.run(BROKER_FLEET, it, seconds = 5).also(::report) } }
+    line("broker_fleet_load_average_after", loadAverage())
+    line("broker_fleet_robots", BROKER_FLEET.toString())
+    for (mode in modes) {
+        val suffix = if (mode == FleetBench.Link.BROKER) "batched" else "unbatched"
+        val rs = rounds.map { it.getValue(mode) }
+        val loads = rs.map { checkNotNull(it.broker) }
+        line("broker_states_per_s_$suffix", spread(loads.map { it.framesPerS }, "%.0f"))
+        line("broker_messages_per_s_$suffix", spread(loads.map { it.messagesPerS }, "%.0f"))
+        line("broker_delivered_share_$suffix", spread(rs.map { 100.0 * it.updates / (BROKER_FLEET * UPDATES_PER_ROBOT_SECOND * 5.0) }, "%.1f%%"))
+        line("broker_cpu_cores_$suffix", spread(loads.map { it.brokerCores }, "%.2f"))
+        line("broker_robots_per_core_$suffix", spread(loads.map { it.framesPerS / UPDATES_PER_ROBOT_SECOND / it.brokerCores.coerceAtLeast(1e-3) }, "%.0f"))
+        line("broker_state_p99_ms_$suffix", spread(rs.map { it.p99Ms }, "%.2f"))
+        line("gateway_client_us_per_update_$suffix", spread(rs.map { it.usPerUpdate }, "%.2f"))
+    }
+}
+
+private const val BROKER_FLEET = 500
+private const val BROKER_FLEET_ROUNDS = 2
 
 private const val FLEET = 1000
 private const val FLEET_ROUNDS = 3

@@ -17,7 +17,6 @@ import org.pocketbot.sdk.mqtt.BrokerRobotDevice
 import org.pocketbot.sdk.mqtt.connectBroker
 import org.pocketbot.sdk.mqtt.startGateway
 import org.pocketbot.sdk.mqtt.testing.MosquittoBroker
-import java.io.File
 import kotlin.test.assertEquals
 import kotlin.test.assertTrue
 import kotlin.time.Duration.Companion.seconds
@@ -69,7 +68,7 @@ class BridgedBrokersTest {
                 roomEmu.start(Speed.Realtime(1.0))
                 MosquittoBroker.start().use { central ->
                     CutProxy(central.tlsPort).use { bridge ->
-                        MosquittoBroker.start(extraConfig = bridgeConfig(central, bridge)).use { room ->
+                        startRoomBroker(central, bridge.port).use { room ->
                             runBlocking {
                                 val lab1 = startGateway("lab1", central.options("lab1"), centralEmu.discoverer())
                                 val lab2 = startGateway("lab2", room.options("lab2"), roomEmu.discoverer())
@@ -91,20 +90,4 @@ class BridgedBrokersTest {
                 centralEmu.stop()
             }
         }
-
-    /** deploy/mosquitto/bridge.conf as shipped, to [central] through [path]. */
-    private fun bridgeConfig(central: MosquittoBroker, path: CutProxy): List<String> {
-        val replaced = mutableSetOf<String>()
-        val lines = File(MosquittoBroker.deployDir, "bridge.conf").readLines().map { line ->
-            val key = line.substringBefore(' ')
-            when (key) {
-                "address" -> "address 127.0.0.1:${path.port}"
-                "remote_password" -> "remote_password ${central.password("bridge")}"
-                "bridge_cafile" -> "bridge_cafile ${central.caFile.path}"
-                else -> return@map line
-            }.also { replaced += key }
-        }
-        assertEquals(setOf("address", "remote_password", "bridge_cafile"), replaced, "deploy/mosquitto/bridge.conf changed")
-        return lines
-    }
 }
