@@ -33,7 +33,7 @@ class BrokerFaultTest {
         delay(2.seconds)
         assertStoppedByFailsafe(s.sim, "broker dead for 2 s")
         s.broker.restart()
-        assertCutByFailsafe(s.sim, s.start, handle.await())
+        assertCutByFailsafe(s.robot, s.sim, s.start, handle)
         withTimeout(10.seconds) { s.client.connected.first { it } }
         assertNextMovementRunsOnce(s.robot, s.sim)
     }
@@ -47,7 +47,7 @@ class BrokerFaultTest {
         assertStoppedByFailsafe(s.sim, "broker frozen for 3 s")
         val frozen = s.sim.trueWheelDistances
         s.broker.thaw()
-        assertCutByFailsafe(s.sim, s.start, handle.await())
+        assertCutByFailsafe(s.robot, s.sim, s.start, handle)
         // What the broker held for 3 s reached the gateway, too late to be executed: the robot did not move on.
         assertTrue(s.gateway.stats.value.droppedLate > 0, "nothing dropped as late: ${s.gateway.stats.value}")
         assertTrue(s.sim.drivenSince(frozen) < 0.0005, "the robot moved after the freeze, by ${s.sim.drivenSince(frozen)} m")
@@ -67,7 +67,7 @@ class BrokerFaultTest {
         // Its robot links died with it; a new gateway process serves the robot again, and the client finds it.
         s.gateway.close()
         s.gateway = s.scope.startGateway("lab1", s.broker.options("lab1"), s.emu.discoverer())
-        assertCutByFailsafe(s.sim, s.start, handle.await())
+        assertCutByFailsafe(s.robot, s.sim, s.start, handle)
         assertNextMovementRunsOnce(s.robot, s.sim)
     }
 
@@ -80,9 +80,8 @@ class BrokerFaultTest {
         delay(2.seconds)
         assertStoppedByFailsafe(s.sim, "client cut off for 2 s")
         s.path.restore()
-        assertCutByFailsafe(s.sim, s.start, handle.await())
+        assertCutByFailsafe(s.robot, s.sim, s.start, handle)
         assertEquals(true, s.client.connected.value)
-        assertTrue(s.robot.linkStats.value.reconnects >= 1, "${s.robot.linkStats.value}")
         assertNextMovementRunsOnce(s.robot, s.sim)
     }
 

@@ -8,7 +8,7 @@ import org.pocketbot.emulator.WheelDistances
 import org.pocketbot.protocol.LocoMode
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
-import org.pocketbot.sdk.MovementResult
+import org.pocketbot.sdk.MovementHandle
 import org.pocketbot.sdk.Robot
 import org.pocketbot.sdk.mqtt.BrokerClient
 import org.pocketbot.sdk.mqtt.BrokerOptions
@@ -44,10 +44,12 @@ internal suspend fun assertStoppedByFailsafe(sim: RobotHandle, why: String) {
 }
 
 /**
- * The movement started at [start] was cut by the failsafe: its handle ended FAILSAFE (or LOST) and reports what the
- * robot really drove.
+ * The movement [handle] started at [start] was cut by the failsafe: the handle ended FAILSAFE (or LOST) and reports
+ * what the robot really drove, and the client's robot says it stands by its failsafe.
  */
-internal fun assertCutByFailsafe(sim: RobotHandle, start: WheelDistances, result: MovementResult) {
+internal suspend fun assertCutByFailsafe(robot: Robot, sim: RobotHandle, start: WheelDistances, handle: MovementHandle) {
+    val result = handle.await()
+    withTimeout(2.seconds) { robot.locomotion.state.first { robot.locomotion.mode == org.pocketbot.sdk.LocoMode.FAILSAFE } }
     val trueM = sim.drivenSince(start)
     assertTrue(result.outcome == MovementOutcome.FAILSAFE || result.outcome == MovementOutcome.LOST, "$result")
     // Cut 1 s after the host's last packet, which left at most a heartbeat (1/3 s) before the cut at 1 s.
