@@ -5,6 +5,8 @@ import kotlinx.coroutines.delay
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.connect
 import org.pocketbot.sdk.transport.RobotDevice
+import java.util.concurrent.locks.LockSupport
+import kotlin.random.Random
 
 /**
  * Command to acknowledgement, as a program meets it: a connected [org.pocketbot.sdk.Robot] sends `stop` (an acked
@@ -22,6 +24,9 @@ internal object AckBench {
             repeat(warmup) { robot.locomotion.stop() }
             val ns = LongArray(samples)
             for (i in 0 until samples) {
+                // A random pause first: a command sent right after the last ack would meet the emulator's 1 ms step
+                // always at the same phase, which hides anything the path adds below a step.
+                LockSupport.parkNanos(Random.nextLong(1_000_000))
                 val t0 = System.nanoTime()
                 robot.locomotion.stop()
                 ns[i] = System.nanoTime() - t0

@@ -133,33 +133,43 @@ private const val ACK_ROUNDS = 3
 
 /**
  * State through one broker (FleetBench over [FleetBench.Link.BROKER] and [FleetBench.Link.BROKER_UNBATCHED]): a
- * gateway serves [BROKER_FLEET] stand-in robots at 100 full states a second each, a fleet client in the same process
- * receives them through Mosquitto; batched (the default 10 ms window) and unbatched in turn, [BROKER_FLEET_ROUNDS]
- * rounds. Per mode: state frames and up messages a second the broker carried, the share of the offered states that
- * arrived, the broker's CPU (in cores), and from it the robots at 100 Hz one broker core carries (the goal is
- * >= 500 batched), and the p99 latency of a state from the stand-in to the client's collector.
+ * gateway serves [BROKER_FLEET_SIZES] stand-in robots at 100 full states a second each, a fleet client in the same
+ * process receives them through Mosquitto; batched (the default 10 ms window) and unbatched in turn,
+ * [BROKER_FLEET_ROUNDS] rounds. At each size: the share of the offered states that arrived and their p99 latency
+ * from the stand-in to the client's collector. At the largest: state frames and up messages a second the broker
+ * carried, the broker's CPU (in cores), and from it the robots at 100 Hz one broker core carries (the goal is >= 500
+ * batched).
  */
 private fun brokerFleet() {
     line("broker_fleet_load_average_before", loadAverage())
     val modes = listOf(FleetBench.Link.BROKER, FleetBench.Link.BROKER_UNBATCHED)
-    val rounds = List(BROKER_FLEET_ROUNDS) { modes.associateWith { FleetBench.run(BROKER_FLEET, it, seconds = 5).also(::report) } }
+    fun suffix(mode: FleetBench.Link) = if (mode == FleetBench.Link.BROKER) "batched" else "unbatched"
+    val rounds = List(BROKER_FLEET_ROUNDS) {
+        BROKER_FLEET_SIZES.associateWith { n -> modes.associateWith { FleetBench.run(n, it, seconds = 5).also(::report) } }
+    }
     line("broker_fleet_load_average_after", loadAverage())
-    line("broker_fleet_robots", BROKER_FLEET.toString())
+    // How many robots one gateway (with the client in the same process) keeps up with: the share of the offered
+    // states that arrived, and their p99 latency, at each size.
+    for (n in BROKER_FLEET_SIZES) for (mode in modes) {
+        val rs = rounds.map { it.getValue(n).getValue(mode) }
+        line("gateway_delivered_share_${suffix(mode)}_$n", spread(rs.map { 100.0 * it.updates / (n * UPDATES_PER_ROBOT_SECOND * 5.0) }, "%.1f%%"))
+        line("gateway_state_p99_ms_${suffix(mode)}_$n", spread(rs.map { it.p99Ms }, "%.2f"))
+    }
+    val n = BROKER_FLEET_SIZES.last()
+    line("broker_fleet_robots", n.toString())
     for (mode in modes) {
-        val suffix = if (mode == FleetBench.Link.BROKER) "batched" else "unbatched"
-        val rs = rounds.map { it.getValue(mode) }
+        val rs = rounds.map { it.getValue(n).getValue(mode) }
         val loads = rs.map { checkNotNull(it.broker) }
-        line("broker_states_per_s_$suffix", spread(loads.map { it.framesPerS }, "%.0f"))
-        line("broker_messages_per_s_$suffix", spread(loads.map { it.messagesPerS }, "%.0f"))
-        line("broker_delivered_share_$suffix", spread(rs.map { 100.0 * it.updates / (BROKER_FLEET * UPDATES_PER_ROBOT_SECOND * 5.0) }, "%.1f%%"))
-        line("broker_cpu_cores_$suffix", spread(loads.map { it.brokerCores }, "%.2f"))
-        line("broker_robots_per_core_$suffix", spread(loads.map { it.framesPerS / UPDATES_PER_ROBOT_SECOND / it.brokerCores.coerceAtLeast(1e-3) }, "%.0f"))
-        line("broker_state_p99_ms_$suffix", spread(rs.map { it.p99Ms }, "%.2f"))
-        line("gateway_client_us_per_update_$suffix", spread(rs.map { it.usPerUpdate }, "%.2f"))
+        val s = suffix(mode)
+        line("broker_states_per_s_$s", spread(loads.map { it.framesPerS }, "%.0f"))
+        line("broker_messages_per_s_$s", spread(loads.map { it.messagesPerS }, "%.0f"))
+        line("broker_cpu_cores_$s", spread(loads.map { it.brokerCores }, "%.2f"))
+        line("broker_robots_per_core_$s", spread(loads.map { it.framesPerS / UPDATES_PER_ROBOT_SECOND / it.brokerCores.coerceAtLeast(1e-3) }, "%.0f"))
+        line("gateway_client_us_per_update_$s", spread(rs.map { it.usPerUpdate }, "%.2f"))
     }
 }
 
-private const val BROKER_FLEET = 500
+private val BROKER_FLEET_SIZES = listOf(250, 500)
 private const val BROKER_FLEET_ROUNDS = 2
 
 private const val FLEET = 1000

@@ -51,6 +51,7 @@ internal suspend fun assertCutByFailsafe(robot: Robot, sim: RobotHandle, start: 
     val result = handle.await()
     withTimeout(2.seconds) { robot.locomotion.state.first { robot.locomotion.mode == org.pocketbot.sdk.LocoMode.FAILSAFE } }
     val trueM = sim.drivenSince(start)
+    println("cut movement: $result; ground truth $trueM m")
     assertTrue(result.outcome == MovementOutcome.FAILSAFE || result.outcome == MovementOutcome.LOST, "$result")
     // Cut 1 s after the host's last packet, which left at most a heartbeat (1/3 s) before the cut at 1 s.
     assertTrue(trueM in 0.10..0.22, "drove $trueM m of 0.30")
