@@ -2,7 +2,6 @@ package org.pocketbot.sdk.mqtt.faults
 
 import java.io.Closeable
 import java.net.InetAddress
-import java.net.InetSocketAddress
 import java.net.ServerSocket
 import java.net.Socket
 import java.util.concurrent.CopyOnWriteArrayList
@@ -85,6 +84,4 @@ class CutProxy(private val targetPort: Int) : Closeable {
         runCatching { s.setSoLinger(true, 0) }
         runCatching { s.close() }
     }
-
-    override fun toString(): String = "CutProxy(${InetSocketAddress(InetAddress.getLoopbackAddress(), port)} -> $targetPort)"
 }
