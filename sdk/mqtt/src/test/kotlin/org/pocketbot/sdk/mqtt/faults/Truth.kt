@@ -53,8 +53,9 @@ internal suspend fun assertCutByFailsafe(robot: Robot, sim: RobotHandle, start: 
     val trueM = sim.drivenSince(start)
     println("cut movement: $result; ground truth $trueM m")
     assertTrue(result.outcome == MovementOutcome.FAILSAFE || result.outcome == MovementOutcome.LOST, "$result")
-    // Cut 1 s after the host's last packet, which left at most a heartbeat (1/3 s) before the cut at 1 s.
-    assertTrue(trueM in 0.10..0.22, "drove $trueM m of 0.30")
+    // Stopped 1 s after the host's last packet, which left at most a heartbeat (1/3 s) before the cut 1 s in: about
+    // 0.2 m; the upper bound leaves 0.6 s for a loaded machine to make the cut late, and is still short of 0.30 m.
+    assertTrue(trueM in 0.10..0.26, "drove $trueM m of 0.30")
     val done = assertNotNull(result.done, "$result")
     assertTrue(abs(done - trueM) < 0.005, "reported $done m, ground truth $trueM m")
 }
