@@ -30,7 +30,7 @@ import kotlin.time.Duration.Companion.milliseconds
 /**
  * `make bench-sdk`: every result is one line `sdk <metric>=<value>`; ratios are taken within this one run.
  *
- *   java -cp sdk/bench/target/classes:$(cat sdk/bench/target/classpath.txt) org.pocketbot.bench.SdkBenchKt [codec] [realtime] [connect]
+ *   java -cp sdk/bench/target/classes:$(cat sdk/bench/target/classpath.txt) org.pocketbot.bench.SdkBenchKt [codec] [realtime] [connect] [fleet] [ack] [broker-fleet]
  */
 fun main(args: Array<String>) {
     val which = args.toSet().ifEmpty { setOf("codec", "realtime", "connect", "fleet", "ack", "broker-fleet") }
@@ -145,14 +145,14 @@ private fun brokerFleet() {
     val modes = listOf(FleetBench.Link.BROKER, FleetBench.Link.BROKER_UNBATCHED)
     fun suffix(mode: FleetBench.Link) = if (mode == FleetBench.Link.BROKER) "batched" else "unbatched"
     val rounds = List(BROKER_FLEET_ROUNDS) {
-        BROKER_FLEET_SIZES.associateWith { n -> modes.associateWith { FleetBench.run(n, it, seconds = 5).also(::report) } }
+        BROKER_FLEET_SIZES.associateWith { n -> modes.associateWith { FleetBench.run(n, it, BROKER_FLEET_SECONDS).also(::report) } }
     }
     line("broker_fleet_load_average_after", loadAverage())
     // How many robots one gateway (with the client in the same process) keeps up with: the share of the offered
     // states that arrived, and their p99 latency, at each size.
     for (n in BROKER_FLEET_SIZES) for (mode in modes) {
         val rs = rounds.map { it.getValue(n).getValue(mode) }
-        line("gateway_delivered_share_${suffix(mode)}_$n", spread(rs.map { 100.0 * it.updates / (n * UPDATES_PER_ROBOT_SECOND * 5.0) }, "%.1f%%"))
+        line("gateway_delivered_share_${suffix(mode)}_$n", spread(rs.map { 100.0 * it.updates / (n * UPDATES_PER_ROBOT_SECOND * BROKER_FLEET_SECONDS.toDouble()) }, "%.1f%%"))
         line("gateway_state_p99_ms_${suffix(mode)}_$n", spread(rs.map { it.p99Ms }, "%.2f"))
     }
     val n = BROKER_FLEET_SIZES.last()
@@ -171,6 +171,7 @@ private fun brokerFleet() {
 
 private val BROKER_FLEET_SIZES = listOf(250, 500)
 private const val BROKER_FLEET_ROUNDS = 2
+private const val BROKER_FLEET_SECONDS = 5
 
 private const val FLEET = 1000
 private const val FLEET_ROUNDS = 3
