@@ -7,6 +7,7 @@ import com.github.ajalt.clikt.core.UsageError
 import com.github.ajalt.clikt.core.obj
 import com.github.ajalt.clikt.core.parse
 import com.github.ajalt.clikt.core.subcommands
+import com.github.ajalt.clikt.parameters.groups.provideDelegate
 import com.github.ajalt.clikt.parameters.options.default
 import com.github.ajalt.clikt.parameters.options.flag
 import com.github.ajalt.clikt.parameters.options.option
@@ -20,6 +21,7 @@ import kotlinx.coroutines.TimeoutCancellationException
 import kotlinx.coroutines.coroutineScope
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
+import org.pocketbot.emulator.cli.BrokerFlags
 import org.pocketbot.emulator.cli.EmulatorCommand
 import org.pocketbot.sdk.CommandRefusedException
 import org.pocketbot.sdk.CommandTimeoutException
@@ -34,6 +36,8 @@ import org.pocketbot.sdk.RobotClosedException
 import org.pocketbot.sdk.RobotEvent
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.transport.EmulatorDiscoverer
+import org.pocketbot.sdk.mqtt.BrokerClient
+import org.pocketbot.sdk.mqtt.connectBroker
 import org.pocketbot.sdk.transport.TransportLostException
 import kotlin.system.exitProcess
 import kotlin.time.Duration.Companion.milliseconds
@@ -87,22 +91,26 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
         for it), 6 firmware version mismatch, 7 timeout, 8 driven by another host (commands that change a robot need
         --take-over then; the others only watch it).
 
-        Example: pocketbot settings set PocketBot-1 line_pid.kp 1.5
+        Examples: pocketbot settings set PocketBot-1 line_pid.kp 1.5
+                  pocketbot --broker mqtts://central:8883 --ca ca.crt --user alice move lab1/PocketBot-1 straight 0.1
     """.trimIndent()
 
     private val format by formatOptions().default(Format.TABLE)
     private val host by option(help = "host of the emulator's control port").default("127.0.0.1")
     private val controlPort by option("--control-port", help = "the emulator's control port").int().default(EmulatorDiscoverer.DEFAULT_CONTROL_PORT)
-    private val sources by option("--sources", help = "where to look: emulator, serial, bluetooth (comma-separated)")
+    private val sources by option("--sources", help = "where to look: emulator, serial, bluetooth, broker (comma-separated; --broker adds the broker)")
         .split(",").default(listOf("emulator", "serial", "bluetooth"))
     private val scanSeconds by option("--scan-seconds", help = "how long to look for robots").double().default(3.0)
+    internal val broker by BrokerFlags()
 
     override fun run() {
-        val unknown = sources - setOf("emulator", "serial", "bluetooth")
+        val unknown = sources - setOf("emulator", "serial", "bluetooth", "broker")
         if (unknown.isNotEmpty()) throw UsageError("unknown source ${unknown.joinToString()}", "--sources")
+        val brokerOptions = broker.options()
+        if ("broker" in sources && brokerOptions == null) throw UsageError("--sources broker needs --broker URL", "--sources")
         currentContext.obj = Globals(
             format,
-            Sources(host, controlPort, sources.toSet(), (scanSeconds * 1000).toLong().milliseconds),
+            Sources(host, controlPort, sources.toSet(), (scanSeconds * 1000).toLong().milliseconds, brokerOptions),
         )
     }
 }
@@ -111,7 +119,7 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
 fun run(args: Array<String>): Int {
     val command = PocketBot().subcommands(
         ScanCommand(), InfoCommand(), SettingsCommand(), StateCommand(), ConsoleCommand(),
-        MoveCommand(), StopCommand(), FollowCommand(), EmulatorCommand(),
+        MoveCommand(), StopCommand(), FollowCommand(), EmulatorCommand(), GatewayCommand(),
     )
     return try {
         command.parse(args)
@@ -152,14 +160,16 @@ fun robotCommand(
         val progress = Progress()
         var robots = emptyList<Robot>()
         var listening = emptyList<Job>()
+        var broker: BrokerClient? = null
         try {
             progress.show("looking for robots")
+            broker = globals.sources.broker?.let { connectBroker(it) }
             // Robots named by name or address end the search once all are found; ids and --all need the whole scan;
             // robots named only by their addresses need none.
-            val found = if (!all && names.all { deviceAt(it) != null }) emptyList() else globals.sources.scan(enough = { f ->
-                !all && names.all { n -> f.any { it.device.name == n || it.device.address == n } }
+            val found = if (!all && names.all { deviceAt(it) != null }) emptyList() else globals.sources.scan(broker, enough = { f ->
+                !all && names.all { n -> f.any { it.answersTo(n) } }
             })
-            robots = connectRobots(found, names, all, RobotOptions(globals.options) { this.role = role }, progress)
+            robots = connectRobots(found, names, all, RobotOptions(globals.options) { this.role = role }, progress, broker)
             listening = robots.map { r -> launch { r.events.collect { tell(r, it) } } }
             if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
                 throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
@@ -180,6 +190,7 @@ fun robotCommand(
         } finally {
             listening.forEach { it.cancel() }
             for (r in robots) r.disconnect(onLeave)
+            broker?.close()
         }
     }
     if (code != Exit.OK) throw com.github.ajalt.clikt.core.ProgramResult(code)

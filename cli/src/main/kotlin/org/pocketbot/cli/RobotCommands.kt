@@ -43,6 +43,8 @@ import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.SettingField
 import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.WheelDistances
+import org.pocketbot.sdk.mqtt.BrokerException
+import org.pocketbot.sdk.mqtt.connectBroker
 import java.io.File
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -115,9 +117,18 @@ class ScanCommand : CoreCliktCommand(name = "scan") {
         val out = Output(format ?: globals.format)
         val progress = Progress()
         progress.show("looking for robots")
-        val found = runBlocking { globals.sources.scan(problem = { System.err.println("pocketbot: $it") }) }
+        val found = runBlocking {
+            val broker = globals.sources.broker?.let { options ->
+                try { connectBroker(options) } catch (e: BrokerException) {
+                    progress.clear()
+                    System.err.println("pocketbot: ${e.message}")
+                    throw ProgramResult(Exit.FAILED)
+                }
+            }
+            try { globals.sources.scan(broker, problem = { System.err.println("pocketbot: $it") }) } finally { broker?.close() }
+        }
         progress.clear()
-        for (f in found) out.row("name" to f.device.name, "address" to f.device.address, "source" to f.source)
+        for (f in found) out.row("name" to f.name, "address" to f.device.address, "source" to f.source)
         out.flush()
         if (found.isEmpty()) {
             System.err.println("pocketbot: no robots found")

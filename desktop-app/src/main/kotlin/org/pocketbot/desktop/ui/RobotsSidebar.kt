@@ -65,7 +65,7 @@ fun RobotsSidebar(model: PanelModel, modifier: Modifier = Modifier) {
                 Checkbox(checked = f.address in ticked, onCheckedChange = { on -> ticked = if (on) ticked + f.address else ticked - f.address },
                     modifier = Modifier.testTag("tick-${f.address}"))
                 Column(Modifier.weight(1f)) {
-                    Text(f.device.name, style = MaterialTheme.typography.bodyMedium)
+                    Text(f.name, style = MaterialTheme.typography.bodyMedium)
                     Text("${f.source} · ${f.address}", style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant)
                     failures[f.address]?.let { why ->
                         Text(why, Modifier.testTag("connect-failure-${f.address}"), style = MaterialTheme.typography.bodySmall,
@@ -75,7 +75,7 @@ fun RobotsSidebar(model: PanelModel, modifier: Modifier = Modifier) {
                 if (f.address in connecting) Text("connecting", style = MaterialTheme.typography.labelSmall)
             }
         }
-        if (unconnected.isEmpty() && !scanning) Text("No robots waiting. Scan looks in the embedded emulator, an emulator's control port, Bluetooth and serial ports.",
+        if (unconnected.isEmpty() && !scanning) Text("No robots waiting. Scan looks in the embedded emulator, an emulator's control port, Bluetooth, serial ports and the broker of --broker.",
             style = MaterialTheme.typography.bodySmall)
         for ((source, why) in problems) Text("$source: $why", style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant)
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
