@@ -51,7 +51,7 @@ NATIVE_ENGINE := $(wildcard firmware/build/native/lib/*/libpocketbot-firmware.so
 
 # The published libraries (and their parent POM and BOM), and the folder `make publish` deploys them to: a Maven
 # repository on disk, never ~/.m2 (install is skipped; the local repository is shared with other builds).
-LIBRARIES     := library,library/bom,sdk/protocol,sdk/core,sdk/jvm,emulator,emulator/simulated
+LIBRARIES     := library,library/bom,sdk/protocol,sdk/core,sdk/jvm,emulator,emulator/simulated,sdk/mqtt
 PUBLISH_REPO  ?= target/repository
 publish_to     = -Dmaven.install.skip=true -DaltDeploymentRepository=pocketbot::file://$(abspath $(1))
 

@@ -20,6 +20,8 @@ PACKAGES=(
   fontconfig fonts-dejavu-core
   # the Android app's APK without Gradle: resources and manifest, alignment, signing and its check
   aapt zipalign apksigner
+  # fleets over MQTT: the broker the tests start (mosquitto_passwd comes with it), certificates for its TLS listener
+  mosquitto openssl
 )
 # `ensure-deps.sh desktop`: what the control panel's window needs (a JRE with AWT, fonts); `screenshots` adds a
 # virtual display to photograph it on.
