@@ -75,7 +75,7 @@ fun RobotsSidebar(model: PanelModel, modifier: Modifier = Modifier) {
                 if (f.address in connecting) Text("connecting", style = MaterialTheme.typography.labelSmall)
             }
         }
-        if (unconnected.isEmpty() && !scanning) Text("No robots waiting. Scan looks in the embedded emulator, an emulator's control port, Bluetooth, serial ports and the broker of --broker.",
+        if (unconnected.isEmpty() && !scanning) Text("No robots waiting. Scan looks in the embedded emulator, an emulator's control port, Bluetooth and serial ports.",
             style = MaterialTheme.typography.bodySmall)
         for ((source, why) in problems) Text("$source: $why", style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant)
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
