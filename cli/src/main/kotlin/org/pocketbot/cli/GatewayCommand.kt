@@ -12,6 +12,7 @@ import com.github.ajalt.clikt.parameters.options.option
 import com.github.ajalt.clikt.parameters.options.required
 import com.github.ajalt.clikt.parameters.types.int
 import com.github.ajalt.clikt.parameters.types.restrictTo
+import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.awaitCancellation
 import kotlinx.coroutines.flow.emitAll
 import kotlinx.coroutines.flow.flow
@@ -62,7 +63,8 @@ class GatewayCommand : CoreCliktCommand(name = "gateway") {
                 emulatorPort?.let { emitAll(EmulatorDiscoverer(globals.sources.host, it).discover()) }
             }
         }
-        runBlocking {
+        // On the shared pool, not this thread's loop: the shutdown hook closes the gateway while this thread waits.
+        runBlocking(Dispatchers.Default) {
             val gateway = try {
                 startGateway(name, options, robots)
             } catch (e: BrokerException) {
