@@ -87,7 +87,7 @@ class CliBrokerTest {
         val s = jsonLines(state.out).single()
         assertEquals("PocketBot-1", s["robot"]!!.jsonPrimitive.content)
         assertTrue(s["time.time_ms"]!!.jsonPrimitive.content.toLong() > 0, "$state")
-        assertTrue(gateway.stats.value.sessions >= 3, "every command had its own session: ${gateway.stats.value}")
+        assertTrue(gateway.stats.value.sessions >= 2, "move and state each had a session of their own: ${gateway.stats.value}")
     }
 
     @Test
@@ -135,7 +135,7 @@ class CliBrokerTest {
             val rotate = pocketbot("alice", "move", "lab2/PocketBot-1", "rotate", "30", "--speed", "0.1", "--wait")
             assertEquals(0, rotate.code, "$rotate")
             val turned = Math.toDegrees(Math.IEEEremainder(sim.truePose.headingRad - heading, 2 * Math.PI))
-            assertTrue(kotlin.math.abs(turned - 30) < 5, "turned $turned degrees for 30")
+            assertTrue(kotlin.math.abs(turned - 30) < 10, "turned $turned degrees for 30")
 
             val stopped = served.interrupt()
             val counters = Regex("""^gateway lab2 stopped: sessions=(\d+) frames_up=(\d+) .*frames_down=(\d+) """, RegexOption.MULTILINE)

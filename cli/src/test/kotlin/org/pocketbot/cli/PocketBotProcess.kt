@@ -70,9 +70,12 @@ class PocketBotProcess(args: List<String>, env: Map<String, String> = emptyMap()
         return Run(process.exitValue(), out.toString(), err.toString())
     }
 
-    /** Interrupts the command (SIGTERM, as `kill` does) and waits for its end. */
+    /**
+     * Interrupts the command (SIGTERM, as `kill` does) and waits for its end. Through its ProcessHandle: Process.destroy
+     * would also close the pipes, and what the command says on its way out would be lost.
+     */
     fun interrupt(): Run {
-        process.destroy()
+        process.toHandle().destroy()
         return await()
     }
 

@@ -57,7 +57,8 @@ class PanelBrokerUiTest {
                     val robot = f.panel.selected.value!!
                     assertEquals("lab1/PocketBot-1", robot.name)
                     assertEquals("lab1", robot.gateway)
-                    assertTrue(onNodeWithTag("robot-link-lab1/PocketBot-1").text().startsWith("connected"), onNodeWithTag("robot-link-lab1/PocketBot-1").text())
+                    val link = onNodeWithTag("robot-link-lab1/PocketBot-1", useUnmergedTree = true).text()
+                    assertTrue(link.startsWith("connected") && "/lab1/" in link, "the sidebar's link line: $link")
 
                     // Driven from the Commands view; its live state shows the movement while it runs, then its result.
                     onNodeWithTag("tab-COMMANDS").performClick()
