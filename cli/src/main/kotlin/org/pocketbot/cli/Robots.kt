@@ -126,7 +126,8 @@ private fun gatewayTrouble(broker: BrokerClient, name: String) {
     val gateway = name.substringBefore('/', missingDelimiterValue = "").ifEmpty { return }
     val gateways = broker.gateways.value
     val presence = gateways[gateway]
-        ?: throw NoSuchRobotException("no gateway '$gateway' on ${broker.options.url} (gateways: ${gateways.keys.sorted().joinToString().ifEmpty { "none" }})")
+        ?: throw NoSuchRobotException("no gateway '$gateway' on ${broker.options.url} (gateways: " +
+            gateways.entries.sortedBy { it.key }.joinToString { (n, p) -> if (p.online) n else "$n (offline)" }.ifEmpty { "none" } + ")")
     if (!presence.online) throw BrokerException("gateway '$gateway' is offline: its robots cannot be reached through ${broker.options.url}")
 }
 
