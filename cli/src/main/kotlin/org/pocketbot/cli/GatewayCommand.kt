@@ -19,7 +19,6 @@ import kotlinx.coroutines.flow.flow
 import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeoutOrNull
-import org.pocketbot.emulator.cli.BrokerFlags
 import org.pocketbot.sdk.mqtt.BrokerException
 import org.pocketbot.sdk.mqtt.Gateway
 import org.pocketbot.sdk.mqtt.GatewayStats
@@ -47,11 +46,11 @@ class GatewayCommand : CoreCliktCommand(name = "gateway") {
     private val name by option("--name", help = "the gateway's name: its robots' topics are pb/v1/NAME/... (the broker's ACL grants them to its user)").required()
     private val emulatorPort by option("--emulator-port", metavar = "PORT", help = "also serve every robot of the emulator whose control port this is (on --host)")
         .int().restrictTo(1..65535)
-    private val broker by BrokerFlags()
+    private val broker by brokerOptions()
     private val addresses by argument("ADDRESS", help = "a robot's address: tcp://HOST:PORT or serial:PATH").multiple()
 
     override fun run() {
-        val options = broker.options() ?: globals.sources.broker ?: throw UsageError("a gateway needs --broker URL", "--broker")
+        val options = globals.with(broker).sources.broker ?: throw UsageError("a gateway needs --broker URL", "--broker")
         if (addresses.isEmpty() && emulatorPort == null) throw UsageError("name the robots to serve: ADDRESS... or --emulator-port")
         val devices = addresses.map { a ->
             try { deviceAt(a) } catch (e: IllegalArgumentException) { throw UsageError(e.message ?: a) }

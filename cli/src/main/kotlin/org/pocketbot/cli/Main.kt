@@ -72,10 +72,24 @@ object Exit {
 /** What every command shares: where to look for robots, and how to print. */
 class Globals(val format: Format, val sources: Sources) {
     val options = RobotOptions { hostLabel = HostLabel.of("cli") }
+
+    /**
+     * These, with the broker a command's own [flags] name (`pocketbot scan --broker URL`) if they name one.
+     *
+     * @throws UsageError for `--sources broker` without a broker.
+     */
+    fun with(flags: BrokerFlags): Globals {
+        val merged = flags.options()?.let { Globals(format, sources.through(it)) } ?: this
+        if ("broker" in merged.sources.kinds && merged.sources.broker == null) throw UsageError("--sources broker needs --broker URL", "--sources")
+        return merged
+    }
 }
 
 /** Another host drives the robot and the command would change it: exit code 8. */
 class DrivenElsewhereException(message: String) : Exception(message)
+
+/** `--broker` and its credentials, accepted before the command (for every command) and after it. */
+fun brokerOptions() = BrokerFlags()
 
 /** `--json` / `--csv`, accepted before the command (for every command) and after it: the format, or null for the default. */
 fun CoreCliktCommand.formatOptions() = option(help = "output format: --json (one object per line) or --csv").switch("--json" to Format.JSON, "--csv" to Format.CSV)
@@ -84,7 +98,9 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
     override fun help(context: Context) = """
         Scripts PocketBot robots and fleets: find them, read and write their settings, watch their state and debug
         text, move them. A robot is named by its name, its id or its address (tcp://127.0.0.1:40001 or
-        serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found.
+        serial:/dev/rfcomm0 need no scan); --all runs a command on every robot found. With --broker the robots of
+        other hosts are found too, through an MQTT broker, each named GATEWAY/ROBOT (pocketbot gateway serves them);
+        --broker and its credentials go before the command or after it, like --json.
 
         Exit codes: 0 ok, 1 other failure, 2 usage (also an unknown setting or field), 3 no such robot,
         4 refused by the robot, 5 link lost (also a link that stays down for ${LINK_GRACE.inWholeSeconds} s: no command waits longer
@@ -101,16 +117,14 @@ class PocketBot : CoreCliktCommand(name = "pocketbot") {
     private val sources by option("--sources", help = "where to look: emulator, serial, bluetooth, broker (comma-separated; --broker adds the broker)")
         .split(",").default(listOf("emulator", "serial", "bluetooth"))
     private val scanSeconds by option("--scan-seconds", help = "how long to look for robots").double().default(3.0)
-    internal val broker by BrokerFlags()
+    private val broker by brokerOptions()
 
     override fun run() {
         val unknown = sources - setOf("emulator", "serial", "bluetooth", "broker")
         if (unknown.isNotEmpty()) throw UsageError("unknown source ${unknown.joinToString()}", "--sources")
-        val brokerOptions = broker.options()
-        if ("broker" in sources && brokerOptions == null) throw UsageError("--sources broker needs --broker URL", "--sources")
         currentContext.obj = Globals(
             format,
-            Sources(host, controlPort, sources.toSet(), (scanSeconds * 1000).toLong().milliseconds, brokerOptions),
+            Sources(host, controlPort, sources.toSet(), (scanSeconds * 1000).toLong().milliseconds, broker.options()),
         )
     }
 }

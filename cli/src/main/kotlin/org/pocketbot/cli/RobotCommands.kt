@@ -9,6 +9,7 @@ import com.github.ajalt.clikt.core.requireObject
 import com.github.ajalt.clikt.core.subcommands
 import com.github.ajalt.clikt.parameters.arguments.argument
 import com.github.ajalt.clikt.parameters.arguments.multiple
+import com.github.ajalt.clikt.parameters.groups.provideDelegate
 import com.github.ajalt.clikt.parameters.options.default
 import com.github.ajalt.clikt.parameters.options.flag
 import com.github.ajalt.clikt.parameters.options.option
@@ -56,6 +57,7 @@ import kotlin.time.Duration.Companion.milliseconds
 abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : CoreCliktCommand(name) {
     private val globals by requireObject<Globals>()
     private val format by formatOptions()
+    private val broker by brokerOptions()
     private val all by option("--all", help = "every robot found").flag()
     private val words by argument("ROBOT ARGS").multiple()
 
@@ -74,7 +76,7 @@ abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : 
         val names = if (all) emptyList() else listOfNotNull(words.firstOrNull())
         if (rest.size !in extra) throw UsageError("wrong number of arguments: ${words.joinToString(" ")}")
         try { check() } catch (e: IllegalArgumentException) { throw UsageError(e.message ?: "bad arguments") }
-        robotCommand(globals, format, names, all, role(), mustDrive(), onLeave()) { robots, out -> act(robots, out) }
+        robotCommand(globals.with(broker), format, names, all, role(), mustDrive(), onLeave()) { robots, out -> act(robots, out) }
     }
 
     /** What the command asks to be on the robots: it watches unless it changes them. */
@@ -112,20 +114,22 @@ class ScanCommand : CoreCliktCommand(name = "scan") {
     override fun help(context: Context) = "Lists the robots every source finds, one line each.\n\nExample: pocketbot scan --json"
     private val globals by requireObject<Globals>()
     private val format by formatOptions()
+    private val broker by brokerOptions()
 
     override fun run() {
+        val sources = globals.with(broker).sources
         val out = Output(format ?: globals.format)
         val progress = Progress()
         progress.show("looking for robots")
         val found = runBlocking {
-            val broker = globals.sources.broker?.let { options ->
+            val broker = sources.broker?.let { options ->
                 try { connectBroker(options) } catch (e: BrokerException) {
                     progress.clear()
                     System.err.println("pocketbot: ${e.message}")
                     throw ProgramResult(Exit.FAILED)
                 }
             }
-            try { globals.sources.scan(broker, problem = { System.err.println("pocketbot: $it") }) } finally { broker?.close() }
+            try { sources.scan(broker, problem = { System.err.println("pocketbot: $it") }) } finally { broker?.close() }
         }
         progress.clear()
         for (f in found) out.row("name" to f.name, "address" to f.device.address, "source" to f.source)

@@ -43,7 +43,7 @@ class Found(val device: RobotDevice, val source: String) {
 
 /** Where to look for robots, as the global options say: [broker] adds the robots of every gateway behind it. */
 class Sources(
-    val host: String, private val controlPort: Int, private val kinds: Set<String>, private val timeout: Duration,
+    val host: String, private val controlPort: Int, val kinds: Set<String>, private val timeout: Duration,
     val broker: BrokerOptions? = null,
 ) {
     private fun discoverers(broker: BrokerClient?): Map<String, Discoverer> = buildMap {
@@ -52,6 +52,9 @@ class Sources(
         if ("bluetooth" in kinds) put("bluetooth", BluezDiscoverer(duration = timeout))
         if (broker != null) put("broker", broker.discoverer())
     }
+
+    /** These sources with the robots behind [broker] too. */
+    fun through(broker: BrokerOptions) = Sources(host, controlPort, kinds, timeout, broker)
 
     /**
      * Every robot the sources find within the timeout (through [broker] too, connected to [Sources.broker]), or as soon

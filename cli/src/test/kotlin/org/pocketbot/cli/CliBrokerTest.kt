@@ -82,7 +82,9 @@ class CliBrokerTest {
         val moved = hypot(sim.truePose.xM - start.xM, sim.truePose.yM - start.yM)
         assertTrue(moved in 0.045..0.055, "the robot really moved ${moved * 1000} mm of 50")
 
-        val state = pocketbot("alice", "state", "lab1/PocketBot-1", "--json", "--fields", "pose,time.time_ms")
+        // The broker's options after the command, as after `--json`.
+        val state = runPocketBot(listOf("--sources", "broker", "state", "lab1/PocketBot-1", "--json", "--fields", "pose,time.time_ms",
+            "--broker", broker.url, "--ca", broker.caFile.path, "--user", "alice", "--password-file", passwordFile("alice").path))
         assertEquals(0, state.code, "$state")
         val s = jsonLines(state.out).single()
         assertEquals("PocketBot-1", s["robot"]!!.jsonPrimitive.content)
@@ -106,6 +108,9 @@ class CliBrokerTest {
         val noBroker = runPocketBot(listOf("--user", "alice", "scan"))
         assertEquals(Exit.USAGE, noBroker.code, "$noBroker")
         assertTrue("need --broker" in noBroker.err, "$noBroker")
+        val brokerSourceWithoutBroker = runPocketBot(listOf("--sources", "broker", "state", "lab1/PocketBot-1"))
+        assertEquals(Exit.USAGE, brokerSourceWithoutBroker.code, "$brokerSourceWithoutBroker")
+        assertTrue("--sources broker needs --broker URL" in brokerSourceWithoutBroker.err, "$brokerSourceWithoutBroker")
         val badUrl = runPocketBot(listOf("--broker", "http://127.0.0.1:1", "scan"))
         assertEquals(Exit.USAGE, badUrl.code, "$badUrl")
         assertTrue("mqtt://" in badUrl.err, "$badUrl")
