@@ -75,7 +75,7 @@ public class BrokerOptions private constructor(
             null -> throw IllegalArgumentException("broker URL \"$url\" has no scheme: write mqtt://host or mqtts://host")
             else -> throw IllegalArgumentException("broker URL \"$url\": scheme ${uri.scheme} is not mqtt or mqtts")
         }
-        host = uri.host ?: throw IllegalArgumentException("broker URL \"$url\" has no host")
+        host = uri.host?.removePrefix("[")?.removeSuffix("]") ?: throw IllegalArgumentException("broker URL \"$url\" has no host")
         port = if (uri.port == -1) (if (tls) DEFAULT_TLS_PORT else DEFAULT_PORT) else uri.port
         require(port in 1..65535) { "broker URL \"$url\": port $port is not a TCP port" }
         require(uri.userInfo == null) { "broker URL \"$url\": give the username and password as options, not in the URL" }

@@ -239,7 +239,8 @@ public class Gateway internal constructor(
             link.publish(upTopic, Wire.frames(monotonicMs(), emptyList()))  // opened
             launch { up(t) }
             while (!ended) {
-                val r = withTimeoutOrNull(SESSION_IDLE) { inbox.receive() } ?: return@launch end("no message for $SESSION_IDLE")
+                val next = withTimeoutOrNull(SESSION_IDLE) { inbox.receiveCatching() } ?: return@launch end("no message for $SESSION_IDLE")
+                val r = next.getOrNull() ?: return@launch  // ended meanwhile
                 val m = r.message
                 if (m === CLIENT_GONE.message) return@launch end(null)
                 offsetMs = minOf(offsetMs, r.atMs - m.timeMs)

@@ -38,7 +38,7 @@ class MqttFleetTest {
     private lateinit var gateways: List<Gateway>
 
     @BeforeAll
-    fun start() = runBlocking {
+    fun start() = runBlocking<Unit> {
         broker = MosquittoBroker.start()
         emulators.forEach { it.start(Speed.Realtime(1.0)) }
         gateways = listOf("lab1", "lab2").mapIndexed { i, name ->
@@ -48,7 +48,7 @@ class MqttFleetTest {
     }
 
     @AfterAll
-    fun stop() = runBlocking {
+    fun stop() = runBlocking<Unit> {
         gateways.forEach { it.close() }
         scope.cancel()
         emulators.forEach { it.close() }
@@ -56,7 +56,7 @@ class MqttFleetTest {
     }
 
     @Test
-    fun aClientDrivesARobotOfEachGatewayAndAWatcherSeesWhoDrives() = runBlocking {
+    fun aClientDrivesARobotOfEachGatewayAndAWatcherSeesWhoDrives() = runBlocking<Unit> {
         val alice = connectBroker(broker.options("alice"))
         val devices = alice.discoverer().discover().toList().map { it as BrokerRobotDevice }
         assertEquals(setOf("lab1", "lab2"), devices.map { it.gateway }.toSet(), "$devices")
