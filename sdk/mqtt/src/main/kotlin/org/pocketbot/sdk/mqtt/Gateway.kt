@@ -7,6 +7,7 @@ import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.Job
 import kotlinx.coroutines.NonCancellable
 import kotlinx.coroutines.SupervisorJob
+import kotlinx.coroutines.delay
 import kotlinx.coroutines.channels.Channel
 import kotlinx.coroutines.channels.ChannelResult
 import kotlinx.coroutines.flow.MutableStateFlow
@@ -83,7 +84,8 @@ public class Gateway internal constructor(
         closing = true
         withContext(NonCancellable) {
             for (s in sessions.values.toList()) s.end("the gateway closed")
-            if (link.connected.value) {
+            // A stalled broker does not hold the close up: its clients learn of it from the last will instead.
+            if (link.connected.value) withTimeoutOrNull(CLOSE_TIMEOUT) {
                 for (id in served.keys) {
                     link.publishAndWait(Topics.info(name, id), ByteArray(0), retain = true)
                     link.publishAndWait(Topics.lease(name, id), ByteArray(0), retain = true)
@@ -203,7 +205,7 @@ public class Gateway internal constructor(
 
     private suspend fun forgetEndedSessions() {
         while (true) {
-            kotlinx.coroutines.delay(SESSION_IDLE)
+            delay(SESSION_IDLE)
             val before = monotonicMs() - 2 * SESSION_IDLE.inWholeMilliseconds
             recentlyEnded.entries.removeIf { it.value < before }
         }
@@ -355,6 +357,7 @@ public class Gateway internal constructor(
         val SESSION_KINDS = setOf(Topics.DOWN, Topics.WATCH)
         val DOWN_KINDS = setOf(Wire.FRAMES, Wire.OPEN, Wire.CLOSE)
         val SESSION_IDLE = 5.seconds
+        val CLOSE_TIMEOUT = 2.seconds
         /** state_full, state_reduced, debug_text: the frames that stream, and wait to share a message. */
         val BATCHED_TYPES = setOf(2, 3, 7)
         const val MAX_UP_BATCH_BYTES = 8 * 1024

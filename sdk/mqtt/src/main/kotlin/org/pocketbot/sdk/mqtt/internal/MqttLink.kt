@@ -13,6 +13,7 @@ import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
 import kotlinx.coroutines.future.await
+import kotlinx.coroutines.withTimeoutOrNull
 import org.pocketbot.sdk.mqtt.BrokerException
 import org.pocketbot.sdk.mqtt.BrokerOptions
 import java.io.IOException
@@ -23,6 +24,7 @@ import java.util.concurrent.CompletionException
 import java.util.concurrent.TimeUnit
 import javax.net.ssl.SSLException
 import javax.net.ssl.TrustManagerFactory
+import kotlin.time.Duration.Companion.seconds
 
 /**
  * One MQTT 5 connection to the broker of [options], shared by everything a [org.pocketbot.sdk.mqtt.BrokerClient] or a
@@ -110,7 +112,7 @@ internal class MqttLink(
     suspend fun disconnect() {
         closing = true
         try {
-            client.disconnect().await()
+            withTimeoutOrNull(DISCONNECT_TIMEOUT) { client.disconnect().await() }
         } catch (e: Exception) {
             // already disconnected, or the broker is gone: either way the link is down
         }
@@ -121,6 +123,7 @@ internal class MqttLink(
         const val KEEP_ALIVE_SECONDS = 10
         const val RECONNECT_INITIAL_MS = 200L
         const val RECONNECT_MAX_MS = 5_000L
+        val DISCONNECT_TIMEOUT = 2.seconds
 
         /** A sentence for people saying why a connection failed or ended. */
         fun describe(cause: Throwable?): String {
