@@ -148,9 +148,9 @@ fun run(args: Array<String>): Int {
 /** What happened to a robot while a command ran, on stderr: a script's output stays clean. */
 private fun tell(robot: Robot, event: RobotEvent) = when (event) {
     is RobotEvent.Restarted ->
-        System.err.println("pocketbot: ${robot.identity.name} restarted: its clock went back from ${event.lastSeenTimeMs / 1000.0} s to ${event.timeMs / 1000.0} s")
+        System.err.println("pocketbot: ${robot.label} restarted: its clock went back from ${event.lastSeenTimeMs / 1000.0} s to ${event.timeMs / 1000.0} s")
     is RobotEvent.DriverChanged ->
-        if (event.taken) System.err.println("pocketbot: ${robot.identity.name} was taken over by ${event.driving.driver}") else Unit
+        if (event.taken) System.err.println("pocketbot: ${robot.label} was taken over by ${event.driving.driver}") else Unit
 }
 
 fun main(args: Array<String>) {
@@ -186,7 +186,7 @@ fun robotCommand(
             robots = connectRobots(found, names, all, RobotOptions(globals.options) { this.role = role }, progress, broker)
             listening = robots.map { r -> launch { r.events.collect { tell(r, it) } } }
             if (mustDrive) robots.firstOrNull { !it.driving.value.byThisHost }?.let { r ->
-                throw DrivenElsewhereException("${r.identity.name} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
+                throw DrivenElsewhereException("${r.label} is driven by ${r.driving.value.driver ?: "no host"} (use --take-over)")
             }
             coroutineScope { // a failure of any robot's part surfaces as itself
                 val watch = launch { throw linkGone(robots) }

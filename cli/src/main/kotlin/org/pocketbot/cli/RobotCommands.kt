@@ -190,7 +190,7 @@ class SettingsList : RobotCommand("list", 0..1) {
             val fields = r.settings.fields.filter { group == null || it.name.startsWith("$group.") || it.name == group }
             if (fields.isEmpty()) throw IllegalArgumentException("no settings group '$group'")
             for (f in fields) {
-                out.row(linkedMapOf("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to f.rangeText, "doc" to f.doc)
+                out.row(linkedMapOf("robot" to r.label, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to f.rangeText, "doc" to f.doc)
                     .also { if (robots.size == 1) it.remove("robot") })
             }
         }
@@ -203,7 +203,7 @@ class SettingsGet : RobotCommand("get", 1..Int.MAX_VALUE) {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         for (r in robots) for (name in rest) {
             val f = field(r, name)
-            out.row("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit)
+            out.row("robot" to r.label, "name" to f.name, "value" to shown(f), "unit" to f.unit)
         }
     }
 }
@@ -222,7 +222,7 @@ class SettingsSet : DrivingCommand("set", 2..2) {
             val f = field(r, name) as SettingField<Any>
             val value = f.parse(text)
             f.set(value)
-            out.row("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "status" to "acknowledged")
+            out.row("robot" to r.label, "name" to f.name, "value" to shown(f), "status" to "acknowledged")
         }
     }
 }
@@ -231,7 +231,7 @@ class SettingsSave : DrivingCommand("save") {
     override fun help(context: Context) = "Saves the robot's settings to its EEPROM (they survive a reset).\n\nExample: pocketbot settings save --all"
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.settings.save()
-        out.row("robot" to r.identity.name, "status" to "saved")
+        out.row("robot" to r.label, "status" to "saved")
     }.let { }
 }
 
@@ -239,12 +239,12 @@ class SettingsDefaults : DrivingCommand("defaults") {
     override fun help(context: Context) = "Loads the firmware's default settings (not saved until 'settings save').\n\nExample: pocketbot settings defaults PocketBot-1"
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.settings.loadDefaults()
-        out.row("robot" to r.identity.name, "status" to "defaults loaded")
+        out.row("robot" to r.label, "status" to "defaults loaded")
     }.let { }
 }
 
 /** With --all, settings files live in a directory, one per robot, named after the robot. */
-private fun fileOf(dir: File, robot: Robot): File = File(dir, robot.identity.name.replace(Regex("[^A-Za-z0-9._-]"), "_") + ".json")
+private fun fileOf(dir: File, robot: Robot): File = File(dir, robot.label.replace(Regex("[^A-Za-z0-9._-]"), "_") + ".json")
 
 class SettingsExport : RobotCommand("export", 0..1) {
     override fun help(context: Context) = """
@@ -271,7 +271,7 @@ class SettingsExport : RobotCommand("export", 0..1) {
         for (r in robots) {
             val file = fileOf(target, r)
             file.writeText(r.settings.exportJson())
-            out.row("robot" to r.identity.name, "file" to file.path)
+            out.row("robot" to r.label, "file" to file.path)
         }
     }
 }
@@ -298,7 +298,7 @@ class SettingsImport : DrivingCommand("import", 1..1) {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         val texts = robots.associateWith { r ->
             val file = if (allRobots) fileOf(path, r) else path
-            if (!file.isFile) throw IllegalArgumentException("no settings file ${file.path} for ${r.identity.name}")
+            if (!file.isFile) throw IllegalArgumentException("no settings file ${file.path} for ${r.label}")
             file.readText()
         }
         onEach(robots) { r ->
@@ -309,7 +309,7 @@ class SettingsImport : DrivingCommand("import", 1..1) {
                 r.settings.importJson(before)
                 throw e
             }
-            out.row("robot" to r.identity.name, "written" to written, "status" to "imported")
+            out.row("robot" to r.label, "written" to written, "status" to "imported")
         }
     }
 }
@@ -342,7 +342,7 @@ class StateCommand : DrivingCommand("state") {
     }
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
-        fun print(r: Robot, s: RobotState) = out.row(linkedMapOf<String, Any?>("robot" to r.identity.name).apply {
+        fun print(r: Robot, s: RobotState) = out.row(linkedMapOf<String, Any?>("robot" to r.label).apply {
             for (c in selected) put(c.name, c.of(r, s))
         })
         if (!watch) {
@@ -354,15 +354,15 @@ class StateCommand : DrivingCommand("state") {
         rate?.let { hz ->
             onEach(robots) { r ->
                 if (r.driving.value.byThisHost) r.reflector.set(SyncMode.FULL, (1000 / hz).milliseconds)
-                else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its state comes as that host chose (--take-over to set the rate)")
+                else System.err.println("pocketbot: ${r.label} is driven by ${r.driving.value.driver}: its state comes as that host chose (--take-over to set the rate)")
             }
         }
-        out.stream(linkedMapOf("robot" to robots.maxOf { it.identity.name.length }) + selected.associate { it.name to it.width })
+        out.stream(linkedMapOf("robot" to robots.maxOf { it.label.length }) + selected.associate { it.name to it.width })
         withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
             val printers = robots.map { r -> launch { r.stateUpdates.collect { print(r, it.state) } } }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
+            throw LinkLostException("lost the link to ${gone.label}: ${describe(gone.connection.value)}")
         }
     }
 }
@@ -395,20 +395,20 @@ class ConsoleCommand : DrivingCommand("console") {
                 if (r.driving.value.byThisHost) {
                     r.settings.debug.level.set(l)
                     r.setRole(Role.WATCH) // reading the console needs no drive: the robot is free for other hosts
-                } else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
+                } else System.err.println("pocketbot: ${r.label} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
             }
         }
         out.stream(linkedMapOf(
-            "robot" to robots.maxOf { it.identity.name.length }, "level" to 1,
+            "robot" to robots.maxOf { it.label.length }, "level" to 1,
             "source" to (DebugModule.entries + DebugSource.entries).maxOf { it.name.length }, "text" to 0,
         ))
         withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
             val printers = robots.map { r ->
-                launch { r.debugLog.messages.collect { m -> out.row("robot" to r.identity.name, "level" to m.level, "source" to (m.module?.name?.lowercase() ?: m.source.name.lowercase()), "text" to m.text) } }
+                launch { r.debugLog.messages.collect { m -> out.row("robot" to r.label, "level" to m.level, "source" to (m.module?.name?.lowercase() ?: m.source.name.lowercase()), "text" to m.text) } }
             }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
+            throw LinkLostException("lost the link to ${gone.label}: ${describe(gone.connection.value)}")
         }
     }
 }
@@ -457,7 +457,7 @@ class MoveCommand : DrivingCommand("move", 2..3) {
         val moves = robots.map { r -> async { start(r) } }.awaitAll()
         if (!wait) {
             for (m in moves) {
-                out.row("robot" to m.robot.identity.name, "id" to m.handle.id, "movement" to movement.toString(), "status" to "queued",
+                out.row("robot" to m.robot.label, "id" to m.handle.id, "movement" to movement.toString(), "status" to "queued",
                     "on_leave" to if (leave == QueueOnLeave.FINISH) "the robot finishes it" else "the robot drops it")
             }
             return
@@ -481,8 +481,8 @@ class MoveCommand : DrivingCommand("move", 2..3) {
         val mode = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }?.locomotion?.mode
         val started = Started(r, r.locomotion.enqueue(movement), r.odometry.wheelDistances.value)
         when (mode) {
-            LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.identity.name} was following the line: the movement ended that")
-            LocoMode.TRACK -> System.err.println("pocketbot: ${r.identity.name} ran the track behaviour: the movement ended that")
+            LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.label} was following the line: the movement ended that")
+            LocoMode.TRACK -> System.err.println("pocketbot: ${r.label} ran the track behaviour: the movement ended that")
             else -> {}
         }
         return started
@@ -504,7 +504,7 @@ class MoveCommand : DrivingCommand("move", 2..3) {
 
         /** Its row: how it ended, or with [result] null `lost` and what [seen] says. */
         fun row(result: MovementResult?): Map<String, Any?> = linkedMapOf(
-            "robot" to robot.identity.name, "id" to handle.id, "movement" to movement.toString(),
+            "robot" to robot.label, "id" to handle.id, "movement" to movement.toString(),
             "outcome" to (result?.outcome ?: MovementOutcome.LOST),
             // The robot's own figure is a float: as it says it. Without one, what this host saw.
             "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit.symbol,
@@ -517,7 +517,7 @@ class StopCommand : RobotCommand("stop") {
     private val now by option("--now", help = "motors off at once").flag()
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.locomotion.stop(immediate = now)
-        out.row("robot" to r.identity.name, "status" to "stopped")
+        out.row("robot" to r.label, "status" to "stopped")
     }.let { }
 }
 
@@ -540,6 +540,6 @@ class FollowCommand : DrivingCommand("follow", 1..1) {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         if (rest.single() == "start") r.lineFollower.start(speed, if (colours) ColourMode.SEGMENTS else ColourMode.PLAIN)
         else r.lineFollower.stop()
-        out.row("robot" to r.identity.name, "status" to if (rest.single() == "start") "following" else "stopped")
+        out.row("robot" to r.label, "status" to if (rest.single() == "start") "following" else "stopped")
     }.let { }
 }

@@ -163,3 +163,12 @@ class Progress(private val enabled: Boolean = stderrIsTerminal()) {
         }
     }
 }
+
+/**
+ * The robot as the user names it: GATEWAY/ROBOT behind a broker's gateway (its address ends with them, so two
+ * gateways' PocketBot-1 differ), else the name it advertises.
+ */
+val Robot.label: String
+    get() = identity.address.takeIf { it.startsWith("mqtt://") || it.startsWith("mqtts://") }
+        ?.substringAfter("://")?.substringAfter('/', "")?.takeIf { path -> path.count { it == '/' } == 1 }
+        ?: identity.name

@@ -87,7 +87,7 @@ class CliBrokerTest {
             "--broker", broker.url, "--ca", broker.caFile.path, "--user", "alice", "--password-file", passwordFile("alice").path))
         assertEquals(0, state.code, "$state")
         val s = jsonLines(state.out).single()
-        assertEquals("PocketBot-1", s["robot"]!!.jsonPrimitive.content)
+        assertEquals("lab1/PocketBot-1", s["robot"]!!.jsonPrimitive.content, "named as the user names it")
         assertTrue(s["time.time_ms"]!!.jsonPrimitive.content.toLong() > 0, "$state")
         assertTrue(gateway.stats.value.sessions >= 2, "move and state each had a session of their own: ${gateway.stats.value}")
     }
