@@ -289,9 +289,10 @@ public class Gateway internal constructor(
                 val frame = next.getOrNull()
                 if (frame == null) {
                     flush()
-                    end(if (next.isClosed && next.exceptionOrNull() == null) null else "the robot's link was lost: ${next.exceptionOrNull()?.message}")
+                    end("the robot's link closed" + (next.exceptionOrNull()?.let { ": ${it.message}" } ?: ""))  // no-op after our own close
                     return
                 }
+                if (frame.isEmpty()) continue
                 val type = frame[0].toInt() and 0xFF
                 if (type == Driver.TYPE) driverSaid(frame)
                 if (batch.isEmpty()) flushAt = monotonicMs() + options.upBatchWindow.inWholeMilliseconds
