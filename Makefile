@@ -138,7 +138,8 @@ $(EMULATOR_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
 	$(MAVEN) package -pl emulator -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 
-$(EMULATOR_CLI_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE)
+# The command's --broker serves the robots through sdk/mqtt.
+$(EMULATOR_CLI_STAMP): $(EMULATOR_INPUTS) $(wildcard $(WASM)) $(NATIVE_ENGINE) $(shell find sdk/mqtt/pom.xml sdk/mqtt/src/main -type f 2>/dev/null)
 	$(MAVEN) package -pl emulator/cli -am -DskipTests -Dpocketbot.jsgate.skip=true
 	@touch $@
 

@@ -43,7 +43,7 @@ suspend fun linkGone(robots: List<Robot>): LinkLostException = channelFlow {
             val why = lostBecause ?: describe(now)
             val latest = (now as? ConnectionState.Lost)?.reason?.takeIf { it != why }
             send(LinkLostException(
-                "lost the link to ${r.identity.name}: $why" +
+                "lost the link to ${r.label}: $why" +
                     if (reach == Reach.DOWN) "; it did not come back within ${LINK_GRACE.inWholeSeconds} s" + (latest?.let { " ($it)" } ?: "") else "",
             ))
         }

@@ -9,6 +9,7 @@ import com.github.ajalt.clikt.core.requireObject
 import com.github.ajalt.clikt.core.subcommands
 import com.github.ajalt.clikt.parameters.arguments.argument
 import com.github.ajalt.clikt.parameters.arguments.multiple
+import com.github.ajalt.clikt.parameters.groups.provideDelegate
 import com.github.ajalt.clikt.parameters.options.default
 import com.github.ajalt.clikt.parameters.options.flag
 import com.github.ajalt.clikt.parameters.options.option
@@ -43,6 +44,8 @@ import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.SettingField
 import org.pocketbot.sdk.SyncMode
 import org.pocketbot.sdk.WheelDistances
+import org.pocketbot.sdk.mqtt.BrokerException
+import org.pocketbot.sdk.mqtt.connectBroker
 import java.io.File
 import kotlin.time.Duration.Companion.milliseconds
 
@@ -54,6 +57,7 @@ import kotlin.time.Duration.Companion.milliseconds
 abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : CoreCliktCommand(name) {
     private val globals by requireObject<Globals>()
     private val format by formatOptions()
+    private val broker by brokerOptions()
     private val all by option("--all", help = "every robot found").flag()
     private val words by argument("ROBOT ARGS").multiple()
 
@@ -72,7 +76,7 @@ abstract class RobotCommand(name: String, private val extra: IntRange = 0..0) : 
         val names = if (all) emptyList() else listOfNotNull(words.firstOrNull())
         if (rest.size !in extra) throw UsageError("wrong number of arguments: ${words.joinToString(" ")}")
         try { check() } catch (e: IllegalArgumentException) { throw UsageError(e.message ?: "bad arguments") }
-        robotCommand(globals, format, names, all, role(), mustDrive(), onLeave()) { robots, out -> act(robots, out) }
+        robotCommand(globals.with(broker), format, names, all, role(), mustDrive(), onLeave()) { robots, out -> act(robots, out) }
     }
 
     /** What the command asks to be on the robots: it watches unless it changes them. */
@@ -110,14 +114,25 @@ class ScanCommand : CoreCliktCommand(name = "scan") {
     override fun help(context: Context) = "Lists the robots every source finds, one line each.\n\nExample: pocketbot scan --json"
     private val globals by requireObject<Globals>()
     private val format by formatOptions()
+    private val broker by brokerOptions()
 
     override fun run() {
+        val sources = globals.with(broker).sources
         val out = Output(format ?: globals.format)
         val progress = Progress()
         progress.show("looking for robots")
-        val found = runBlocking { globals.sources.scan(problem = { System.err.println("pocketbot: $it") }) }
+        val found = runBlocking {
+            val broker = sources.broker?.let { options ->
+                try { connectBroker(options) } catch (e: BrokerException) {
+                    progress.clear()
+                    System.err.println("pocketbot: ${e.message}")
+                    throw ProgramResult(Exit.FAILED)
+                }
+            }
+            try { sources.scan(broker, problem = { System.err.println("pocketbot: $it") }) } finally { broker?.close() }
+        }
         progress.clear()
-        for (f in found) out.row("name" to f.device.name, "address" to f.device.address, "source" to f.source)
+        for (f in found) out.row("name" to f.name, "address" to f.device.address, "source" to f.source)
         out.flush()
         if (found.isEmpty()) {
             System.err.println("pocketbot: no robots found")
@@ -175,7 +190,7 @@ class SettingsList : RobotCommand("list", 0..1) {
             val fields = r.settings.fields.filter { group == null || it.name.startsWith("$group.") || it.name == group }
             if (fields.isEmpty()) throw IllegalArgumentException("no settings group '$group'")
             for (f in fields) {
-                out.row(linkedMapOf("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to f.rangeText, "doc" to f.doc)
+                out.row(linkedMapOf("robot" to r.label, "name" to f.name, "value" to shown(f), "unit" to f.unit, "range" to f.rangeText, "doc" to f.doc)
                     .also { if (robots.size == 1) it.remove("robot") })
             }
         }
@@ -188,7 +203,7 @@ class SettingsGet : RobotCommand("get", 1..Int.MAX_VALUE) {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         for (r in robots) for (name in rest) {
             val f = field(r, name)
-            out.row("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "unit" to f.unit)
+            out.row("robot" to r.label, "name" to f.name, "value" to shown(f), "unit" to f.unit)
         }
     }
 }
@@ -207,7 +222,7 @@ class SettingsSet : DrivingCommand("set", 2..2) {
             val f = field(r, name) as SettingField<Any>
             val value = f.parse(text)
             f.set(value)
-            out.row("robot" to r.identity.name, "name" to f.name, "value" to shown(f), "status" to "acknowledged")
+            out.row("robot" to r.label, "name" to f.name, "value" to shown(f), "status" to "acknowledged")
         }
     }
 }
@@ -216,7 +231,7 @@ class SettingsSave : DrivingCommand("save") {
     override fun help(context: Context) = "Saves the robot's settings to its EEPROM (they survive a reset).\n\nExample: pocketbot settings save --all"
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.settings.save()
-        out.row("robot" to r.identity.name, "status" to "saved")
+        out.row("robot" to r.label, "status" to "saved")
     }.let { }
 }
 
@@ -224,12 +239,12 @@ class SettingsDefaults : DrivingCommand("defaults") {
     override fun help(context: Context) = "Loads the firmware's default settings (not saved until 'settings save').\n\nExample: pocketbot settings defaults PocketBot-1"
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.settings.loadDefaults()
-        out.row("robot" to r.identity.name, "status" to "defaults loaded")
+        out.row("robot" to r.label, "status" to "defaults loaded")
     }.let { }
 }
 
 /** With --all, settings files live in a directory, one per robot, named after the robot. */
-private fun fileOf(dir: File, robot: Robot): File = File(dir, robot.identity.name.replace(Regex("[^A-Za-z0-9._-]"), "_") + ".json")
+private fun fileOf(dir: File, robot: Robot): File = File(dir, robot.label.replace(Regex("[^A-Za-z0-9._-]"), "_") + ".json")
 
 class SettingsExport : RobotCommand("export", 0..1) {
     override fun help(context: Context) = """
@@ -256,7 +271,7 @@ class SettingsExport : RobotCommand("export", 0..1) {
         for (r in robots) {
             val file = fileOf(target, r)
             file.writeText(r.settings.exportJson())
-            out.row("robot" to r.identity.name, "file" to file.path)
+            out.row("robot" to r.label, "file" to file.path)
         }
     }
 }
@@ -283,7 +298,7 @@ class SettingsImport : DrivingCommand("import", 1..1) {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
         val texts = robots.associateWith { r ->
             val file = if (allRobots) fileOf(path, r) else path
-            if (!file.isFile) throw IllegalArgumentException("no settings file ${file.path} for ${r.identity.name}")
+            if (!file.isFile) throw IllegalArgumentException("no settings file ${file.path} for ${r.label}")
             file.readText()
         }
         onEach(robots) { r ->
@@ -294,7 +309,7 @@ class SettingsImport : DrivingCommand("import", 1..1) {
                 r.settings.importJson(before)
                 throw e
             }
-            out.row("robot" to r.identity.name, "written" to written, "status" to "imported")
+            out.row("robot" to r.label, "written" to written, "status" to "imported")
         }
     }
 }
@@ -327,7 +342,7 @@ class StateCommand : DrivingCommand("state") {
     }
 
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) {
-        fun print(r: Robot, s: RobotState) = out.row(linkedMapOf<String, Any?>("robot" to r.identity.name).apply {
+        fun print(r: Robot, s: RobotState) = out.row(linkedMapOf<String, Any?>("robot" to r.label).apply {
             for (c in selected) put(c.name, c.of(r, s))
         })
         if (!watch) {
@@ -339,15 +354,15 @@ class StateCommand : DrivingCommand("state") {
         rate?.let { hz ->
             onEach(robots) { r ->
                 if (r.driving.value.byThisHost) r.reflector.set(SyncMode.FULL, (1000 / hz).milliseconds)
-                else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its state comes as that host chose (--take-over to set the rate)")
+                else System.err.println("pocketbot: ${r.label} is driven by ${r.driving.value.driver}: its state comes as that host chose (--take-over to set the rate)")
             }
         }
-        out.stream(linkedMapOf("robot" to robots.maxOf { it.identity.name.length }) + selected.associate { it.name to it.width })
+        out.stream(linkedMapOf("robot" to robots.maxOf { it.label.length }) + selected.associate { it.name to it.width })
         withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
             val printers = robots.map { r -> launch { r.stateUpdates.collect { print(r, it.state) } } }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
+            throw LinkLostException("lost the link to ${gone.label}: ${describe(gone.connection.value)}")
         }
     }
 }
@@ -380,20 +395,20 @@ class ConsoleCommand : DrivingCommand("console") {
                 if (r.driving.value.byThisHost) {
                     r.settings.debug.level.set(l)
                     r.setRole(Role.WATCH) // reading the console needs no drive: the robot is free for other hosts
-                } else System.err.println("pocketbot: ${r.identity.name} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
+                } else System.err.println("pocketbot: ${r.label} is driven by ${r.driving.value.driver}: its debug level stays (--take-over to set it)")
             }
         }
         out.stream(linkedMapOf(
-            "robot" to robots.maxOf { it.identity.name.length }, "level" to 1,
+            "robot" to robots.maxOf { it.label.length }, "level" to 1,
             "source" to (DebugModule.entries + DebugSource.entries).maxOf { it.name.length }, "text" to 0,
         ))
         withTimeoutOrNull(seconds?.let { (it * 1000).toLong().milliseconds } ?: kotlin.time.Duration.INFINITE) {
             val printers = robots.map { r ->
-                launch { r.debugLog.messages.collect { m -> out.row("robot" to r.identity.name, "level" to m.level, "source" to (m.module?.name?.lowercase() ?: m.source.name.lowercase()), "text" to m.text) } }
+                launch { r.debugLog.messages.collect { m -> out.row("robot" to r.label, "level" to m.level, "source" to (m.module?.name?.lowercase() ?: m.source.name.lowercase()), "text" to m.text) } }
             }
             val gone = firstLost(robots)
             printers.forEach { it.cancel() }
-            throw LinkLostException("lost the link to ${gone.identity.name}: ${describe(gone.connection.value)}")
+            throw LinkLostException("lost the link to ${gone.label}: ${describe(gone.connection.value)}")
         }
     }
 }
@@ -442,7 +457,7 @@ class MoveCommand : DrivingCommand("move", 2..3) {
         val moves = robots.map { r -> async { start(r) } }.awaitAll()
         if (!wait) {
             for (m in moves) {
-                out.row("robot" to m.robot.identity.name, "id" to m.handle.id, "movement" to movement.toString(), "status" to "queued",
+                out.row("robot" to m.robot.label, "id" to m.handle.id, "movement" to movement.toString(), "status" to "queued",
                     "on_leave" to if (leave == QueueOnLeave.FINISH) "the robot finishes it" else "the robot drops it")
             }
             return
@@ -466,8 +481,8 @@ class MoveCommand : DrivingCommand("move", 2..3) {
         val mode = withTimeoutOrNull(FIRST_STATE) { r.reportedState() }?.locomotion?.mode
         val started = Started(r, r.locomotion.enqueue(movement), r.odometry.wheelDistances.value)
         when (mode) {
-            LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.identity.name} was following the line: the movement ended that")
-            LocoMode.TRACK -> System.err.println("pocketbot: ${r.identity.name} ran the track behaviour: the movement ended that")
+            LocoMode.LINE_FOLLOW -> System.err.println("pocketbot: ${r.label} was following the line: the movement ended that")
+            LocoMode.TRACK -> System.err.println("pocketbot: ${r.label} ran the track behaviour: the movement ended that")
             else -> {}
         }
         return started
@@ -489,7 +504,7 @@ class MoveCommand : DrivingCommand("move", 2..3) {
 
         /** Its row: how it ended, or with [result] null `lost` and what [seen] says. */
         fun row(result: MovementResult?): Map<String, Any?> = linkedMapOf(
-            "robot" to robot.identity.name, "id" to handle.id, "movement" to movement.toString(),
+            "robot" to robot.label, "id" to handle.id, "movement" to movement.toString(),
             "outcome" to (result?.outcome ?: MovementOutcome.LOST),
             // The robot's own figure is a float: as it says it. Without one, what this host saw.
             "done" to (result?.done?.toFloat() ?: seen()), "unit" to movement.unit.symbol,
@@ -502,7 +517,7 @@ class StopCommand : RobotCommand("stop") {
     private val now by option("--now", help = "motors off at once").flag()
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         r.locomotion.stop(immediate = now)
-        out.row("robot" to r.identity.name, "status" to "stopped")
+        out.row("robot" to r.label, "status" to "stopped")
     }.let { }
 }
 
@@ -525,6 +540,6 @@ class FollowCommand : DrivingCommand("follow", 1..1) {
     override suspend fun CoroutineScope.act(robots: List<Robot>, out: Output) = onEach(robots) { r ->
         if (rest.single() == "start") r.lineFollower.start(speed, if (colours) ColourMode.SEGMENTS else ColourMode.PLAIN)
         else r.lineFollower.stop()
-        out.row("robot" to r.identity.name, "status" to if (rest.single() == "start") "following" else "stopped")
+        out.row("robot" to r.label, "status" to if (rest.single() == "start") "following" else "stopped")
     }.let { }
 }

@@ -64,7 +64,7 @@ class CliProcessTest {
     fun stop() = emulator.close()
 
     private fun pocketbot(vararg args: String, onLine: (String) -> Unit = {}): Run =
-        runPocketBot(listOf("--control-port", controlPort.toString(), "--sources", "emulator", "--scan-seconds", "2") + args, onLine)
+        runPocketBot(listOf("--control-port", controlPort.toString(), "--sources", "emulator", "--scan-seconds", "2") + args, onLine = onLine)
 
     private fun robotFloat(name: String, id: Int) = robotFloat(emulator, name, id)
 

@@ -28,10 +28,11 @@ const val GUARD_SECONDS = 90L
 
 /**
  * A running `pocketbot` process. Its stdout and stderr are read on their own threads as they come, so neither pipe
- * fills up and blocks it, and a test can act on a line while the command runs ([onLine]).
+ * fills up and blocks it, and a test can act on a line while the command runs ([onLine]). [env] is added to its
+ * environment.
  */
-class PocketBotProcess(args: List<String>, private val onLine: (String) -> Unit = {}) {
-    private val process = ProcessBuilder(listOf(launcher.path) + args).start()
+class PocketBotProcess(args: List<String>, env: Map<String, String> = emptyMap(), private val onLine: (String) -> Unit = {}) {
+    private val process = ProcessBuilder(listOf(launcher.path) + args).apply { environment().putAll(env) }.start()
     private val out = StringBuffer()
     private val err = StringBuffer()
     private val lines = LinkedBlockingQueue<String>()
@@ -69,6 +70,15 @@ class PocketBotProcess(args: List<String>, private val onLine: (String) -> Unit 
         return Run(process.exitValue(), out.toString(), err.toString())
     }
 
+    /**
+     * Interrupts the command (SIGTERM, as `kill` does) and waits for its end. Through its ProcessHandle: Process.destroy
+     * would also close the pipes, and what the command says on its way out would be lost.
+     */
+    fun interrupt(): Run {
+        process.toHandle().destroy()
+        return await()
+    }
+
     /** Kills the command if it still runs (test cleanup). */
     fun kill() {
         if (process.isAlive) process.destroyForcibly().waitFor(10, TimeUnit.SECONDS)
@@ -78,4 +88,5 @@ class PocketBotProcess(args: List<String>, private val onLine: (String) -> Unit 
 }
 
 /** Runs `pocketbot ARGS` to its end. */
-fun runPocketBot(args: List<String>, onLine: (String) -> Unit = {}): Run = PocketBotProcess(args, onLine).await()
+fun runPocketBot(args: List<String>, env: Map<String, String> = emptyMap(), onLine: (String) -> Unit = {}): Run =
+    PocketBotProcess(args, env, onLine).await()

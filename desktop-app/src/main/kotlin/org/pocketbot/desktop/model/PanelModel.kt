@@ -22,6 +22,7 @@ import org.pocketbot.sdk.ProtocolMismatchException
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.TrajectoryPoint
 import org.pocketbot.sdk.connect
+import org.pocketbot.sdk.mqtt.BrokerRobotDevice
 import org.pocketbot.sdk.transport.Discoverer
 import org.pocketbot.sdk.transport.MergedDiscoverer
 import org.pocketbot.sdk.transport.RobotDevice
@@ -31,6 +32,12 @@ import kotlin.time.Duration.Companion.seconds
 /** A robot some discoverer found, and which one. */
 class FoundDevice(val device: RobotDevice, val source: String) {
     val address: String get() = device.address
+
+    /** The gateway that serves the robot when it was found through a broker, else null. */
+    val gateway: String? get() = (device as? BrokerRobotDevice)?.gateway
+
+    /** Its name as every view shows it: GATEWAY/NAME for a robot behind a broker's gateway. */
+    val name: String get() = gateway?.let { it + "/" + device.name } ?: device.name
 }
 
 /** The kinds of movement the form offers. */
@@ -149,7 +156,7 @@ class PanelModel(
                     val emulated = emulator?.handleFor(robot.identity.address)
                     // The world view draws the odometry pose over the robot: it starts where the robot is, not at (0, 0).
                     emulated?.let { robot.odometry.reset(it.truePose) }
-                    val model = RobotModel(robot, scope, emulated, ::notify)
+                    val model = RobotModel(robot, scope, emulated, ::notify, gateway = d.gateway)
                     _robots.update { (it + model).sortedWith(byName) }
                     if (_selected.value == null) _selected.value = model
                 } catch (e: CancellationException) {
@@ -161,7 +168,7 @@ class PanelModel(
                         else -> "cannot connect: ${e.message ?: e}"
                     }
                     _connectFailures.update { it + (d.address to why) }
-                    notify("${d.device.name}: $why")
+                    notify("${d.name}: $why")
                 } finally {
                     _connecting.update { it - d.address }
                 }
@@ -277,7 +284,7 @@ class PanelModel(
         /** Every view lists robots in this one order, whatever order they connected in. */
         val byName: Comparator<RobotModel> = Comparator<RobotModel> { a, b -> compareNatural(a.name, b.name) }
             .thenBy { it.robot.identity.robotId }.thenBy { it.address }
-        val foundByName: Comparator<FoundDevice> = Comparator<FoundDevice> { a, b -> compareNatural(a.device.name, b.device.name) }
+        val foundByName: Comparator<FoundDevice> = Comparator<FoundDevice> { a, b -> compareNatural(a.name, b.name) }
             .thenBy { it.address }
     }
 }

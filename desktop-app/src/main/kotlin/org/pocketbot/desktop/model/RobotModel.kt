@@ -83,8 +83,11 @@ class RobotModel(
     /** The emulated robot behind it, for the true pose; null for a real robot. */
     val emulated: RobotHandle?,
     private val notify: (String, Boolean) -> Unit,
+    /** The gateway that serves the robot when it is reached through a broker, else null. */
+    val gateway: String? = null,
 ) {
-    val name: String = robot.identity.name
+    /** The robot's name as every view shows it: GATEWAY/NAME behind a broker's gateway (two hosts' PocketBot-1 differ). */
+    val name: String = gateway?.let { it + "/" + robot.identity.name } ?: robot.identity.name
     val address: String = robot.identity.address
 
     private val _movements = MutableStateFlow<List<QueuedMovement>>(emptyList())

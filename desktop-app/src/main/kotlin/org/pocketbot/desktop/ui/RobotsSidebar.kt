@@ -65,7 +65,7 @@ fun RobotsSidebar(model: PanelModel, modifier: Modifier = Modifier) {
                 Checkbox(checked = f.address in ticked, onCheckedChange = { on -> ticked = if (on) ticked + f.address else ticked - f.address },
                     modifier = Modifier.testTag("tick-${f.address}"))
                 Column(Modifier.weight(1f)) {
-                    Text(f.device.name, style = MaterialTheme.typography.bodyMedium)
+                    Text(f.name, style = MaterialTheme.typography.bodyMedium)
                     Text("${f.source} · ${f.address}", style = MaterialTheme.typography.bodySmall, color = MaterialTheme.colorScheme.onSurfaceVariant)
                     failures[f.address]?.let { why ->
                         Text(why, Modifier.testTag("connect-failure-${f.address}"), style = MaterialTheme.typography.bodySmall,

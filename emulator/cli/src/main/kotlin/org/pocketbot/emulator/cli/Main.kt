@@ -5,6 +5,7 @@ import com.github.ajalt.clikt.core.CoreCliktCommand
 import com.github.ajalt.clikt.core.UsageError
 import com.github.ajalt.clikt.core.CliktError
 import com.github.ajalt.clikt.core.parse
+import com.github.ajalt.clikt.parameters.groups.provideDelegate
 import com.github.ajalt.clikt.parameters.options.convert
 import com.github.ajalt.clikt.parameters.options.default
 import com.github.ajalt.clikt.parameters.options.multiple
@@ -21,9 +22,19 @@ import org.pocketbot.emulator.bluetooth.VirtualBluetooth
 import org.pocketbot.emulator.firmware.FirmwareImage
 import org.pocketbot.emulator.transport.ListenAddress
 import org.pocketbot.emulator.world.Worlds
+import org.pocketbot.sdk.mqtt.BrokerException
+import org.pocketbot.sdk.mqtt.Gateway
+import org.pocketbot.sdk.mqtt.startGateway
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.SupervisorJob
+import kotlinx.coroutines.flow.first
+import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeoutOrNull
 import java.io.IOException
 import java.net.InetSocketAddress
 import kotlin.system.exitProcess
+import kotlin.time.Duration.Companion.seconds
 
 /**
  * The emulator as a command: robots on TCP ports and a control port listing them. `make emulator` runs it, and the
@@ -41,9 +52,13 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         --h4 names (Bumble's HCI bridge in front of a USB dongle: then phones and computers reach the robots over
         real Bluetooth).
 
+        With --broker and --gateway the robots are also served through an MQTT broker, under the gateway's name:
+        programs on other hosts drive them there (pocketbot --broker URL ...).
+
         Examples: emulator --robots 3 --world round
                   emulator --listen 0.0.0.0      (a phone on the same Wi-Fi drives the robots)
                   emulator --robots 2 --link hci (each robot behind its own virtual Bluetooth controller)
+                  emulator --robots 5 --broker mqtts://central:8883 --ca ca.crt --user lab1 --password-file lab1.pw --gateway lab1
     """.trimIndent()
 
     private val robots by option(help = "robots to start, ids 1..N, at the world's start poses").int().restrictTo(1..254).default(1)
@@ -61,6 +76,8 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         .choice("direct", "hci").default("direct")
     private val h4 by option("--h4", metavar = "HOST:PORT",
         help = "with --link hci: robot i drives the H4 controller at the i-th --h4 instead of a virtual one").multiple()
+    private val gatewayName by option("--gateway", metavar = "NAME", help = "with --broker: the gateway's name, the robots' topics pb/v1/NAME/...")
+    private val broker by BrokerFlags()
 
     override fun run() {
         val pace = if (speed == "max") Speed.AsFastAsPossible
@@ -71,6 +88,8 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         // A Bluetooth controller answers on the wall clock: the robot's firmware must run on it too.
         if (hci && pace != Speed.Realtime(1.0)) throw UsageError("--link hci runs at --speed 1 only (controllers keep real time)", "--speed")
         if (h4.isNotEmpty() && h4.size != robots) throw UsageError("--h4 names ${h4.size} controller(s) for $robots robot(s)", "--h4")
+        val brokerOptions = broker.options()
+        if ((brokerOptions == null) != (gatewayName == null)) throw UsageError("--broker and --gateway go together", "--gateway")
         val firmware = if (hci) {
             try { FirmwareImage.compiledHci() } catch (e: IllegalStateException) { throw CliktError(e.message) }
         } else null
@@ -115,9 +134,33 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
         println("PocketBot emulator: world ${w.name}, $robots robot(s), seed $seed, speed ${describe(pace)}${if (hci) ", link hci" else ""}, firmware ${emu.firmwareEngine.name.lowercase()}$where")
         lines.forEach(::println)
         if (control >= 0) println("control $host:$control")
-        System.out.flush()
-        Runtime.getRuntime().addShutdownHook(Thread { emu.close() })
         emu.start(pace)
+        val gateway = brokerOptions?.let { options ->
+            val name = gatewayName!!
+            val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
+            try {
+                runBlocking {
+                    scope.startGateway(name, options, emu.discoverer()).also { g ->
+                        // The line names the robots once the gateway has announced them (a liveness guard, not a wait on time).
+                        withTimeoutOrNull(ANNOUNCE_GUARD) { g.robots.first { it.size == emu.robots.size } }
+                        println("gateway $name on ${options.url}: ${g.robots.value.joinToString { "$name/$it" }}")
+                    }
+                }
+            } catch (e: BrokerException) {
+                emu.close()
+                throw CliktError("cannot serve the robots through ${options.url}: ${e.message}")
+            } catch (e: IllegalArgumentException) {
+                emu.close()
+                throw UsageError(e.message ?: "bad gateway name $name", "--gateway")
+            }
+        }
+        System.out.flush()
+        fun stop() {
+            // The gateway first: it tells the broker the robots are gone before their links close under it.
+            gateway?.let { g -> runBlocking { withTimeoutOrNull(ANNOUNCE_GUARD) { g.close() } } }
+            emu.close()
+        }
+        Runtime.getRuntime().addShutdownHook(Thread(::stop))
         val input = System.`in`.bufferedReader()
         while (true) {
             val line = try { input.readLine() } catch (_: Exception) { null }
@@ -127,11 +170,16 @@ public class EmulatorCommand : CoreCliktCommand(name = "emulator") {
                 "r" -> { emu.resume(); println("running") }
                 "s" -> { emu.pause(); emu.singleStep(); println("t=${emu.time}") }
                 "t" -> println("t=${emu.time} (${emu.timeTicks} ticks of ${SimTime.TICKS_PER_SECOND} Hz)")
-                "q" -> { emu.close(); exitProcess(0) }
+                "q" -> exitProcess(0) // the shutdown hook stops it
                 "" -> {}
                 else -> println("commands: p pause, r resume, s single step, t time, q quit")
             }
         }
+    }
+
+    private companion object {
+        /** How long the gateway may take to announce the robots, or to say goodbye: a guard, not a wait. */
+        val ANNOUNCE_GUARD = 5.seconds
     }
 
     private fun parseEndpoint(text: String): InetSocketAddress {

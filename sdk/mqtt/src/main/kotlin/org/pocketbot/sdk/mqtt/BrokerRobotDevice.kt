@@ -120,7 +120,7 @@ internal class BrokerTransport(
         closed = true
         client.unregister(this)
         if (client.connected.value) sendControl(Wire.CLOSE, "")
-        opened.cancel()
+        opened.completeExceptionally(TransportLostException("$address: closed while opening"))
         frames.close()
     }
 

@@ -4,6 +4,7 @@ import com.hivemq.client.mqtt.datatypes.MqttQos
 import com.hivemq.client.mqtt.mqtt5.message.publish.Mqtt5Publish
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.ExperimentalCoroutinesApi
 import kotlinx.coroutines.Job
 import kotlinx.coroutines.NonCancellable
 import kotlinx.coroutines.SupervisorJob
@@ -15,17 +16,22 @@ import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
 import kotlinx.coroutines.flow.update
 import kotlinx.coroutines.launch
+import kotlinx.coroutines.selects.onTimeout
+import kotlinx.coroutines.selects.select
 import kotlinx.coroutines.withContext
 import kotlinx.coroutines.withTimeoutOrNull
 import kotlinx.serialization.json.JsonNull
 import kotlinx.serialization.json.JsonPrimitive
 import kotlinx.serialization.json.buildJsonObject
 import kotlinx.serialization.json.put
+import org.pocketbot.protocol.DebugText
 import org.pocketbot.protocol.Driver
 import org.pocketbot.protocol.Frames
 import org.pocketbot.protocol.HostRole
 import org.pocketbot.protocol.PACKET_SPECS
 import org.pocketbot.protocol.SetRole
+import org.pocketbot.protocol.StateFull
+import org.pocketbot.protocol.StateReduced
 import org.pocketbot.sdk.mqtt.internal.MqttLink
 import org.pocketbot.sdk.mqtt.internal.Topics
 import org.pocketbot.sdk.mqtt.internal.Wire
@@ -270,6 +276,7 @@ public class Gateway internal constructor(
         }
 
         /** The robot's frames to the client, state and debug frames batched. */
+        @OptIn(ExperimentalCoroutinesApi::class)  // select's onTimeout: unchanged since kotlinx.coroutines 1.7
         private suspend fun up(t: Transport) {
             val batch = ArrayList<ByteArray>()
             var batchBytes = 0
@@ -283,15 +290,21 @@ public class Gateway internal constructor(
                 batchBytes = 0
             }
             while (true) {
+                // select, not withTimeoutOrNull around a receive: a frame taken just as the window times out would
+                // be lost with the cancelled receive (6-8 % of the states at 100 Hz, measured by the fleet bench).
                 val next: ChannelResult<ByteArray>? = if (batch.isEmpty()) t.incoming.receiveCatching()
-                else withTimeoutOrNull((flushAt - monotonicMs()).coerceAtLeast(0)) { t.incoming.receiveCatching() }
+                else select {
+                    t.incoming.onReceiveCatching { it }
+                    onTimeout((flushAt - monotonicMs()).coerceAtLeast(0)) { null }
+                }
                 if (next == null) { flush(); continue }
                 val frame = next.getOrNull()
                 if (frame == null) {
                     flush()
-                    end(if (next.isClosed && next.exceptionOrNull() == null) null else "the robot's link was lost: ${next.exceptionOrNull()?.message}")
+                    end("the robot's link closed" + (next.exceptionOrNull()?.let { ": ${it.message}" } ?: ""))  // no-op after our own close
                     return
                 }
+                if (frame.isEmpty()) continue
                 val type = frame[0].toInt() and 0xFF
                 if (type == Driver.TYPE) driverSaid(frame)
                 if (batch.isEmpty()) flushAt = monotonicMs() + options.upBatchWindow.inWholeMilliseconds
@@ -359,7 +372,7 @@ public class Gateway internal constructor(
         val SESSION_IDLE = 5.seconds
         val CLOSE_TIMEOUT = 2.seconds
         /** state_full, state_reduced, debug_text: the frames that stream, and wait to share a message. */
-        val BATCHED_TYPES = setOf(2, 3, 7)
+        val BATCHED_TYPES = setOf(StateFull.TYPE, StateReduced.TYPE, DebugText.TYPE)
         const val MAX_UP_BATCH_BYTES = 8 * 1024
         val CLIENT_GONE = Received(Wire.Message(Wire.CLOSE, 0, emptyList(), "client gone"), 0)
         val VERSION: String = Gateway::class.java.getResource("/org/pocketbot/sdk/mqtt/version.txt")?.readText()?.trim() ?: "unknown"
