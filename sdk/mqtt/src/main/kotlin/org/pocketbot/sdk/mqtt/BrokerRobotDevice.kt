@@ -3,11 +3,15 @@ package org.pocketbot.sdk.mqtt
 import kotlinx.coroutines.CompletableDeferred
 import kotlinx.coroutines.channels.Channel
 import kotlinx.coroutines.channels.ReceiveChannel
+import kotlinx.coroutines.flow.MutableStateFlow
+import kotlinx.coroutines.flow.StateFlow
+import kotlinx.coroutines.flow.update
 import kotlinx.coroutines.withTimeoutOrNull
 import org.pocketbot.sdk.mqtt.internal.Topics
 import org.pocketbot.sdk.mqtt.internal.Wire
 import org.pocketbot.sdk.mqtt.internal.monotonicMs
 import org.pocketbot.sdk.mqtt.internal.randomHex
+import org.pocketbot.sdk.transport.DroppedFrames
 import org.pocketbot.sdk.transport.RobotDevice
 import org.pocketbot.sdk.transport.Transport
 import org.pocketbot.sdk.transport.TransportLostException
@@ -77,6 +81,9 @@ internal class BrokerTransport(
     private val downTopic = Topics.session(gateway, robot, if (client.options.watchOnly) Topics.WATCH else Topics.DOWN, client.user, session)
     private val frames = Channel<ByteArray>(INCOMING_CAPACITY)
     @Volatile private var closed = false
+    private val dropped = MutableStateFlow(DroppedFrames())
+
+    override val droppedFrames: StateFlow<DroppedFrames> get() = dropped
 
     /** Completed by the gateway's first answer; failed when it says the session is closed. */
     val opened = CompletableDeferred<Unit>()
@@ -94,7 +101,13 @@ internal class BrokerTransport(
 
     /** An up message for this session; on the MQTT client's thread. */
     fun received(payload: ByteArray) {
-        val message = Wire.decode(payload, BrokerClient.UP_KINDS) as? Wire.Message ?: return
+        val message = when (val decoded = Wire.decode(payload, BrokerClient.UP_KINDS)) {
+            // Only the gateway may write here (the broker's ACL), so this is a broken or hostile gateway: counted
+            // where Robot.linkStats adds up what a link dropped, and survived.
+            Wire.Garbage -> return dropped.update { DroppedFrames(it.tooLong, it.badFraming + 1) }
+            Wire.Oversize -> return dropped.update { DroppedFrames(it.tooLong + 1, it.badFraming) }
+            is Wire.Message -> decoded
+        }
         when (message.kind) {
             Wire.FRAMES -> {
                 opened.complete(Unit)

@@ -181,6 +181,29 @@ class MqttSecurityTest {
         client.close()
     }
 
+    @Test
+    fun garbageFromABrokenGatewayIsCountedByTheClientsLinkWhileTheRobotKeepsWorking() = runBlocking<Unit> {
+        val client = connectBroker(broker.options("alice"))
+        val robot = client.device("lab1", robotId).connect(this)
+        // The session's up topic, as the broker delivers it to alice (a second client of hers listens in).
+        val listener = raw("alice")
+        val upTopic = listener.publishes(MqttGlobalPublishFilter.ALL).use { publishes ->
+            listener.subscribeWith().topicFilter("pb/v1/lab1/$robotId/up/alice/#").send()
+            publishes.receive(5, TimeUnit.SECONDS).orElseThrow().topic.toString()
+        }
+        val brokenGateway = raw("lab1")
+        val before = robot.linkStats.value
+        publish(brokenGateway, upTopic, byteArrayOf(9, 9, 9))
+        publish(brokenGateway, upTopic, Wire.frames(monotonicMs(), listOf(ByteArray(Frames.MAX_FRAME + 1))))
+        withTimeout(5.seconds) {
+            robot.linkStats.first { it.badFraming == before.badFraming + 1 && it.tooLong == before.tooLong + 1 }
+        }
+        val result = robot.locomotion.enqueue(Movement.Straight(0.05, 0.2)).await()
+        assertEquals(MovementOutcome.FINISHED, result.outcome, "$result")
+        robot.disconnect()
+        client.close()
+    }
+
     /** A raw MQTT client of [user] on the plain listener (the same passwords and ACL as TLS). */
     private fun raw(user: String): Mqtt5BlockingClient = MqttClient.builder().useMqttVersion5()
         .identifier("raw-$user-${raws.size}").serverHost("127.0.0.1").serverPort(broker.plainPort)
