@@ -5,6 +5,7 @@ import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.SupervisorJob
 import kotlinx.coroutines.async
 import kotlinx.coroutines.cancel
+import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.flow.toList
 import kotlinx.coroutines.runBlocking
@@ -17,6 +18,7 @@ import org.pocketbot.emulator.Emulator
 import org.pocketbot.emulator.Speed
 import org.pocketbot.sdk.Movement
 import org.pocketbot.sdk.MovementOutcome
+import org.pocketbot.sdk.NotDriverException
 import org.pocketbot.sdk.Role
 import org.pocketbot.sdk.RobotOptions
 import org.pocketbot.sdk.connect
@@ -26,6 +28,7 @@ import org.pocketbot.sdk.transport.TransportLostException
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
 import kotlin.test.assertTrue
+import kotlin.time.Duration.Companion.milliseconds
 import kotlin.time.Duration.Companion.seconds
 
 /**
@@ -90,6 +93,36 @@ class MqttFleetTest {
         robots.forEach { it.disconnect() }
         bob.close()
         alice.close()
+    }
+
+    @Test
+    fun oneClientDrivesARobotAtATimeUntilAnotherTakesItOver() = runBlocking<Unit> {
+        // Two programs of one driver user, each with its own broker connection and the SDK's default role (drive).
+        val first = connectBroker(broker.options("alice"))
+        val second = connectBroker(broker.options("alice"))
+        val lab1Robot = gateways[0].robots.value.single()
+        val truth = emulators[0].robots.single()
+        val driving = first.device("lab1", lab1Robot).connect(this)
+        val other = second.device("lab1", lab1Robot).connect(this)
+
+        // The robot keeps its driver: the second program's movement is refused, and the robot does not move.
+        val before = truth.trueWheelDistances
+        assertFailsWith<NotDriverException> { other.locomotion.enqueue(Movement.Straight(0.05, 0.2)).await() }
+        delay(300.milliseconds)
+        fun driven() = truth.trueWheelDistances.let { (it.leftM - before.leftM + it.rightM - before.rightM) / 2 }
+        assertEquals(0.0, driven(), 0.0005, "the refused movement moved the robot")
+
+        // Taking it over moves the drive: now the first program is refused, and the second one's movement runs once.
+        other.takeOver()
+        assertFailsWith<NotDriverException> { driving.locomotion.enqueue(Movement.Straight(0.05, 0.2)).await() }
+        val result = other.locomotion.enqueue(Movement.Straight(0.05, 0.2)).await()
+        assertEquals(MovementOutcome.FINISHED, result.outcome, "$result")
+        delay(300.milliseconds)
+        assertEquals(0.05, driven(), 0.003, "ground truth: only the taken-over robot's movement ran, once")
+        other.disconnect()
+        driving.disconnect()
+        second.close()
+        first.close()
     }
 
     @Test
