@@ -88,7 +88,7 @@ fun main(args: Array<String>) {
         val options = try {
             BrokerOptions(url) {
                 username = brokerUser
-                password = (passwordFile?.useLines { it.firstOrNull() } ?: System.getenv("POCKETBOT_BROKER_PASSWORD")?.takeIf { it.isNotEmpty() })?.toCharArray()
+                passwordFrom(passwordFile)
                 trustedCertificates = ca
             }
         } catch (e: IllegalArgumentException) {

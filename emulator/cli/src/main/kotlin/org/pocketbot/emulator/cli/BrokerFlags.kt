@@ -16,7 +16,7 @@ public class BrokerFlags : OptionGroup("Broker options (robots of other hosts, t
     public val url: String? by option("--broker", metavar = "URL", help = "the broker: mqtts://HOST[:8883] (TLS) or mqtt://HOST[:1883]")
     private val user by option("--user", metavar = "NAME", help = "the broker user (the ACL decides what it may read and write)")
     private val passwordFile by option("--password-file", metavar = "FILE",
-        help = "the broker user's password, the file's first line (else \$$PASSWORD_VARIABLE)")
+        help = "the broker user's password, the file's first line (else \$${BrokerOptions.PASSWORD_VARIABLE})")
         .file(mustExist = true, canBeDir = false, mustBeReadable = true)
     private val ca by option("--ca", metavar = "FILE", help = "the CA certificate (PEM) the broker's TLS certificate is checked against (else the JVM's trust store)")
         .file(mustExist = true, canBeDir = false, mustBeReadable = true)
@@ -32,21 +32,15 @@ public class BrokerFlags : OptionGroup("Broker options (robots of other hosts, t
             if (user != null || passwordFile != null || ca != null || watch) throw UsageError("--user, --password-file, --ca and --watch-only need --broker", "--broker")
             return null
         }
-        val password = passwordFile?.useLines { it.firstOrNull() } ?: System.getenv(PASSWORD_VARIABLE)?.takeIf { it.isNotEmpty() }
         return try {
             BrokerOptions(url) {
                 username = user
-                this.password = password?.toCharArray()
+                passwordFrom(passwordFile)
                 watchOnly = watch
                 trustedCertificates = ca
             }
         } catch (e: IllegalArgumentException) {
             throw UsageError("--broker wants mqtt://HOST[:PORT] or mqtts://HOST[:PORT]: ${e.message}", "--broker")
         }
-    }
-
-    public companion object {
-        /** The environment variable the broker password is read from when no `--password-file` is given. */
-        public const val PASSWORD_VARIABLE: String = "POCKETBOT_BROKER_PASSWORD"
     }
 }

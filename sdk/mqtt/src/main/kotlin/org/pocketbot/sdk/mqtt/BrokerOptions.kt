@@ -13,7 +13,7 @@ import kotlin.time.Duration.Companion.milliseconds
  * ```
  * val options = BrokerOptions("mqtts://broker.lab:8883") {
  *     username = "alice"
- *     password = System.getenv("POCKETBOT_BROKER_PASSWORD").toCharArray()
+ *     passwordFrom(null) // POCKETBOT_BROKER_PASSWORD
  *     trustedCertificates = File("ca.crt")
  * }
  * ```
@@ -119,6 +119,15 @@ public class BrokerOptions private constructor(
         /** See [BrokerOptions.watchOnly]. */
         public var watchOnly: Boolean = false
 
+        /**
+         * Sets [password] as PocketBot's programs take one: the first line of [file], else the environment variable
+         * [PASSWORD_VARIABLE] when it is set and not empty, else none. Never from a command line, where every user of
+         * the machine reads it (`ps`).
+         */
+        public fun passwordFrom(file: File?) {
+            password = (file?.useLines { it.firstOrNull() } ?: System.getenv(PASSWORD_VARIABLE)?.takeIf { it.isNotEmpty() })?.toCharArray()
+        }
+
         internal fun build(url: String) = BrokerOptions(url, this)
     }
 
@@ -128,6 +137,9 @@ public class BrokerOptions private constructor(
 
         /** The port of `mqtts://` when the URL gives none. */
         public const val DEFAULT_TLS_PORT: Int = 8883
+
+        /** The environment variable [Builder.passwordFrom] reads a password from when no file is given. */
+        public const val PASSWORD_VARIABLE: String = "POCKETBOT_BROKER_PASSWORD"
     }
 }
 
